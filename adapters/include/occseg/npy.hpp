@@ -1,0 +1,39 @@
+// NumPy .npy files (format versions 1.0, 2.0 and 3.0), read and written without NumPy.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "occseg/grid.hpp"
+
+namespace occseg {
+
+struct NpyArray {
+  std::string descr;                // numpy dtype string as stored, e.g. "<f4", "|u1", "<u4"
+  std::vector<std::size_t> shape;   // as stored, slowest axis first (C order)
+  bool fortran_order = false;
+  std::vector<unsigned char> data;  // raw little-endian element bytes, in file order
+  std::size_t element_count() const;
+};
+
+// Parses an .npy file. Throws Error(io) if it cannot be read and Error(format) naming the problem
+// for a wrong magic, a malformed header, an unsupported dtype (only little-endian f4, f8, u1, u2,
+// u4 and i4 are read), an element count beyond 2^40 or a file shorter than its header claims.
+NpyArray read_npy(const std::string& path);
+NpyArray parse_npy(const unsigned char* bytes, std::size_t size, const std::string& name);
+
+// Writes a C-order array atomically (write_file_atomically).
+void write_npy(const std::string& path, const std::string& descr, const std::vector<std::size_t>& shape,
+               const void* data, std::size_t bytes);
+
+// An occupancy map from an array indexed [z, y, x] (or [y, x] for a 2D map, nz = 1), C or Fortran
+// order. f4/f8 values must be probabilities in [0, 1]; u1 and u2 map 0..max to 0..1. Values are
+// checked (check_probabilities).
+Grid grid_from_npy(const NpyArray& a, double voxel_size, const std::string& name);
+
+// Writes a map as float32 [z, y, x] and labels as uint32 [z, y, x].
+void write_grid_npy(const std::string& path, const Grid& g);
+void write_labels_npy(const std::string& path, const Dims& d, const std::vector<std::uint32_t>& labels);
+
+}  // namespace occseg

@@ -1,0 +1,28 @@
+// Final labelling: 6-connected components of the voxel states, and the segment table.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "occseg/grid.hpp"
+#include "occseg/params.hpp"
+
+namespace occseg {
+
+struct Segment {
+  std::uint32_t id = 0;
+  State state = State::unknown;
+  std::uint64_t voxels = 0;
+  double mop = 0;                                  // mean occupancy probability of its voxels
+  std::array<std::uint32_t, 3> bbox_min{0, 0, 0};  // voxel indices, inclusive
+  std::array<std::uint32_t, 3> bbox_max{0, 0, 0};
+  std::array<double, 3> centroid{0, 0, 0};         // mean voxel index (x, y, z)
+};
+
+// Labels each 6-connected region of equal state 0..N-1, numbered in the order of their first
+// voxel (x fastest), and fills `segments` (index = id). Throws Error(unsupported) beyond 2^32-1
+// voxels, since labels are uint32.
+void label_components(const std::vector<std::uint8_t>& states, const Grid& grid,
+                      std::vector<std::uint32_t>& labels, std::vector<Segment>& segments);
+
+}  // namespace occseg

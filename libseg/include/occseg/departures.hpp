@@ -1,0 +1,27 @@
+// The `default` preset's departures from the paper (docs/algorithm.md, "Two presets"):
+// per-voxel rules applied after refinement so that what a voxel's own probability says clearly
+// is never overruled by the block it sits in.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "occseg/grid.hpp"
+#include "occseg/params.hpp"
+
+namespace occseg {
+
+// Marks the voxels at 0.5 that belong to an unknown *region*: the union of all (2r+1)^3 cubes
+// made only of voxels at 0.5 (a morphological opening). The rest of the 0.5 voxels are gaps
+// between sensor rays. Outside the map counts as 0.5, so regions cut by the map edge survive.
+std::vector<std::uint8_t> unknown_regions(const Grid& grid, const Params& params);
+
+// Final state of each voxel under the default preset:
+//  - own state free or occupied: that state (an occupied voxel is never free; a voxel seen free
+//    is free);
+//  - at 0.5 inside an unknown region: unknown;
+//  - at 0.5 in a gap: the state the texture segmentation gave it, except that a gap voxel that the
+//    texture calls free but that touches an occupied voxel becomes unknown (a hole in an object's
+//    shell is not a way through).
+void apply_voxel_rules(std::vector<std::uint8_t>& states, const Grid& grid, const Params& params);
+
+}  // namespace occseg

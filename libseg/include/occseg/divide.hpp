@@ -1,0 +1,31 @@
+// Stage 3 (section 3.1): hierarchical division of the map into blocks of uniform texture.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "occseg/grid.hpp"
+#include "occseg/params.hpp"
+#include "occseg/texture.hpp"
+
+namespace occseg {
+
+// An axis-aligned box of voxels, [lo, hi) on each axis.
+struct Block {
+  std::uint32_t lo[3];
+  std::uint32_t hi[3];
+  std::uint64_t volume() const {
+    return std::uint64_t(hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
+  }
+};
+
+// The split decision of eq. (2) over the G-statistics of all pairs of sibling histograms:
+// split when Gmax / Gmin > X. Gmin = 0 with Gmax > 0 is an infinite ratio (split); all G = 0 means
+// identical textures (no split). Fewer than two histograms give no evidence (no split).
+bool should_split(const std::vector<const std::uint32_t*>& histograms, std::size_t bins, double x);
+
+// Tiles the map with Smax blocks anchored at voxel (0,0,0), clipped by the map's far faces, and
+// splits each recursively into octants down to Smin. Leaves come out in a fixed order
+// (top blocks in x-fastest order, octants depth-first), whatever the thread count.
+std::vector<Block> divide(const Grid& grid, const TextureMap& texture, const Params& params);
+
+}  // namespace occseg

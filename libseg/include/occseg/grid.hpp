@@ -1,0 +1,46 @@
+// occseg::Grid: a dense probabilistic occupancy map, x varying fastest.
+#pragma once
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace occseg {
+
+struct Dims {
+  std::size_t nx = 0, ny = 0, nz = 0;
+  std::size_t count() const { return nx * ny * nz; }
+  bool operator==(const Dims& o) const { return nx == o.nx && ny == o.ny && nz == o.nz; }
+};
+
+// Occupancy probabilities in [0, 1], one float per voxel, index = x + nx * (y + ny * z).
+struct Grid {
+  Dims dims;
+  double voxel_size = 1.0;                   // metres per voxel edge
+  std::array<double, 3> origin{0, 0, 0};     // world position of the corner of voxel (0, 0, 0)
+  std::vector<float> p;
+
+  Grid() = default;
+  // Allocates nx*ny*nz voxels at `fill`. Throws Error(bad_dims) on zero or overflowing dims.
+  Grid(Dims d, float fill = 0.5f, double voxel_size = 1.0);
+
+  std::size_t index(std::size_t x, std::size_t y, std::size_t z) const {
+    return x + dims.nx * (y + dims.ny * z);
+  }
+  float at(std::size_t x, std::size_t y, std::size_t z) const { return p[index(x, y, z)]; }
+  float& at(std::size_t x, std::size_t y, std::size_t z) { return p[index(x, y, z)]; }
+};
+
+// Largest voxel count a map may have (2^40): keeps every index and every count exact in
+// size_t, uint64 and double, and rejects absurd headers before allocating.
+constexpr std::size_t kMaxVoxels = std::size_t(1) << 40;
+
+// Throws Error(bad_dims) naming the problem when a dimension is zero or the product overflows
+// or exceeds kMaxVoxels.
+void check_dims(const Dims& d);
+
+// Throws Error(bad_value) naming the first voxel (x, y, z) whose value is NaN, infinite or
+// outside [0, 1].
+void check_probabilities(const Grid& g);
+
+}  // namespace occseg

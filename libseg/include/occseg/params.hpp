@@ -1,0 +1,66 @@
+// occseg::Params: every setting of the pipeline, with the paper's values as defaults, and the
+// two presets. Parameters are also reachable by name (set_param), so the C ABI, the command line
+// and the Python bindings share one table instead of three switch statements.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace occseg {
+
+enum class State : std::uint8_t { free = 0, unknown = 1, occupied = 2 };
+const char* state_name(State s);
+
+enum class Preset { paper, default_preset };
+
+struct Params {
+  Preset preset = Preset::default_preset;
+  int smax = 64;               // size of the first blocks (voxels per edge)
+  int smin = 8;                // smallest block size
+  double split_ratio = 1.2;    // X of eq. (2): split while Gmax / Gmin > X
+  int contrast_bins = 8;       // b: histograms have 64 x b bins
+  double free_below = 0.498;   // p < free_below: free
+  double occupied_above = 0.502;  // p > occupied_above: occupied; in between: unknown
+  int lookahead = 3;           // voxels examined beyond a free/occupied boundary in refinement
+  int refine_passes = 2;       // passes of the six free/occupied scans
+  // default preset only: 0.5-valued regions that hold no (2r+1)^3 cube of them (r = gap_radius; 0: none) are "gaps between
+  // rays" and take the state of the texture segmentation around them; thicker ones stay unknown.
+  int gap_radius = 1;
+  int threads = 0;             // 0: all cores. Results never depend on it.
+  // Called between stages and inside long ones with a stage name and a fraction in [0, 1].
+  // Returning false cancels: segment() throws Error(cancelled).
+  std::function<bool(const char* stage, double fraction)> progress;
+
+  static Params paper();
+  static Params defaults();
+
+  State state_of(double p) const {
+    return p < free_below ? State::free : (p > occupied_above ? State::occupied : State::unknown);
+  }
+  // "p equals 0.5" for refinement: p lies in the unknown band (see docs/algorithm.md).
+  bool at_half(double p) const { return p >= free_below && p <= occupied_above; }
+
+  // Throws Error(invalid_argument) naming the parameter when a value is out of its bounds or
+  // the combination is inconsistent (smin > smax, free_below > occupied_above, ...).
+  void validate() const;
+};
+
+// Description of one named parameter, for --help, occseg_params_* and the Python bindings.
+struct ParamInfo {
+  const char* name;
+  const char* kind;     // "int", "double" or "string"
+  double min, max;      // bounds for numbers
+  const char* description;
+};
+const std::vector<ParamInfo>& param_table();
+
+// Sets one parameter by name from text ("smax", "64"); "preset" resets everything to the named
+// preset. Throws Error(invalid_argument) naming the parameter for unknown names or bad values.
+void set_param(Params& params, const std::string& name, const std::string& value);
+// The current value of a named parameter as text; throws for unknown names.
+std::string get_param(const Params& params, const std::string& name);
+
+const char* preset_name(Preset p);
+
+}  // namespace occseg

@@ -1,0 +1,34 @@
+#include "occseg/create.hpp"
+
+#include "occseg/parallel.hpp"
+
+namespace occseg {
+
+double mean_occupancy(const Grid& grid, const Block& b) {
+  double sum = 0;
+  for (std::uint32_t z = b.lo[2]; z < b.hi[2]; ++z)
+    for (std::uint32_t y = b.lo[1]; y < b.hi[1]; ++y) {
+      const float* row = grid.p.data() + grid.index(0, y, z);
+      for (std::uint32_t x = b.lo[0]; x < b.hi[0]; ++x) sum += row[x];
+    }
+  return sum / static_cast<double>(b.volume());
+}
+
+std::vector<std::uint8_t> create_segments(const Grid& grid, const std::vector<Block>& blocks,
+                                          const Params& params) {
+  std::vector<std::uint8_t> states(grid.dims.count());
+  parallel_for(blocks.size(), params.threads, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) {  // blocks are disjoint: no two threads write one voxel
+      const Block& blk = blocks[i];
+      const auto s = static_cast<std::uint8_t>(params.state_of(mean_occupancy(grid, blk)));
+      for (std::uint32_t z = blk.lo[2]; z < blk.hi[2]; ++z)
+        for (std::uint32_t y = blk.lo[1]; y < blk.hi[1]; ++y) {
+          std::uint8_t* row = states.data() + grid.index(0, y, z);
+          for (std::uint32_t x = blk.lo[0]; x < blk.hi[0]; ++x) row[x] = s;
+        }
+    }
+  });
+  return states;
+}
+
+}  // namespace occseg

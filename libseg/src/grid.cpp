@@ -1,0 +1,49 @@
+#include "occseg/grid.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "occseg/error.hpp"
+
+namespace occseg {
+
+void check_dims(const Dims& d) {
+  if (d.nx == 0 || d.ny == 0 || d.nz == 0)
+    throw Error(Status::bad_dims, "dimensions " + std::to_string(d.nx) + " x " +
+                                      std::to_string(d.ny) + " x " + std::to_string(d.nz) +
+                                      " have a zero");
+  const std::size_t lim = kMaxVoxels;
+  if (d.nx > lim || d.ny > lim / d.nx || d.nz > lim / (d.nx * d.ny))
+    throw Error(Status::bad_dims, "dimensions " + std::to_string(d.nx) + " x " +
+                                      std::to_string(d.ny) + " x " + std::to_string(d.nz) +
+                                      " exceed the limit of 2^40 voxels");
+}
+
+Grid::Grid(Dims d, float fill, double vs) : dims(d), voxel_size(vs) {
+  check_dims(d);
+  p.assign(d.count(), fill);
+}
+
+void check_probabilities(const Grid& g) {
+  check_dims(g.dims);
+  if (g.p.size() != g.dims.count())
+    throw Error(Status::invalid_argument, "grid holds " + std::to_string(g.p.size()) +
+                                              " values for " + std::to_string(g.dims.count()) +
+                                              " voxels");
+  if (!(g.voxel_size > 0) || !std::isfinite(g.voxel_size))
+    throw Error(Status::bad_value, "voxel size " + std::to_string(g.voxel_size) +
+                                       " is not a positive finite number");
+  for (std::size_t i = 0; i < g.p.size(); ++i) {
+    const float v = g.p[i];
+    if (!(v >= 0.0f && v <= 1.0f)) {  // also catches NaN
+      const std::size_t x = i % g.dims.nx, y = (i / g.dims.nx) % g.dims.ny,
+                        z = i / (g.dims.nx * g.dims.ny);
+      const char* what = std::isnan(v) ? "is NaN" : (std::isinf(v) ? "is infinite" : "is outside [0, 1]");
+      throw Error(Status::bad_value, "probability at voxel (" + std::to_string(x) + ", " +
+                                         std::to_string(y) + ", " + std::to_string(z) + ") = " +
+                                         std::to_string(v) + " " + what);
+    }
+  }
+}
+
+}  // namespace occseg

@@ -1,0 +1,42 @@
+#include "occseg/parallel.hpp"
+
+#include <exception>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace occseg {
+
+int resolve_threads(int threads) {
+  if (threads > 0) return threads;
+  const unsigned hw = std::thread::hardware_concurrency();
+  return hw ? static_cast<int>(hw) : 1;
+}
+
+void parallel_for(std::size_t n, int threads, const std::function<void(std::size_t, std::size_t)>& fn) {
+  if (n == 0) return;
+  std::size_t t = static_cast<std::size_t>(resolve_threads(threads));
+  if (t > n) t = n;
+  if (t <= 1) {
+    fn(0, n);
+    return;
+  }
+  std::exception_ptr first;
+  std::mutex m;
+  auto run = [&](std::size_t b, std::size_t e) {
+    try {
+      fn(b, e);
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(m);
+      if (!first) first = std::current_exception();
+    }
+  };
+  std::vector<std::thread> pool;
+  pool.reserve(t - 1);
+  for (std::size_t k = 1; k < t; ++k) pool.emplace_back(run, n * k / t, n * (k + 1) / t);
+  run(0, n / t);
+  for (auto& th : pool) th.join();
+  if (first) std::rethrow_exception(first);
+}
+
+}  // namespace occseg

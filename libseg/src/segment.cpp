@@ -1,0 +1,80 @@
+#include "occseg/segment.hpp"
+
+#include <chrono>
+
+#include "occseg/create.hpp"
+#include "occseg/departures.hpp"
+#include "occseg/error.hpp"
+#include "occseg/refine.hpp"
+#include "occseg/texture.hpp"
+
+namespace occseg {
+
+namespace {
+
+class Stages {
+ public:
+  Stages(const Params& p, Result& r) : params_(p), result_(r) {}
+  // Reports the stage about to start; throws Error(cancelled) if the callback says stop.
+  void begin(const char* name) {
+    end();
+    report(name, 0.0);
+    name_ = name;
+    start_ = std::chrono::steady_clock::now();
+  }
+  void end() {
+    if (!name_) return;
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    result_.timings.push_back({name_, s});
+    report(name_, 1.0);
+    name_ = nullptr;
+  }
+
+ private:
+  void report(const char* name, double f) {
+    if (params_.progress && !params_.progress(name, f))
+      throw Error(Status::cancelled, std::string("cancelled by the progress callback at stage '") + name + "'");
+  }
+  const Params& params_;
+  Result& result_;
+  const char* name_ = nullptr;
+  std::chrono::steady_clock::time_point start_;
+};
+
+}  // namespace
+
+Result segment(const Grid& grid, const Params& params, bool keep_stages) {
+  params.validate();
+  check_probabilities(grid);
+  Result r;
+  r.dims = grid.dims;
+  Stages st(params, r);
+
+  st.begin("texture");
+  TextureMap tex = compute_texture(grid, params.contrast_bins, params.threads);
+  st.begin("division");
+  std::vector<Block> blocks = divide(grid, tex, params);
+  tex = TextureMap();  // free the codes before the per-voxel states exist
+  st.begin("creation");
+  std::vector<std::uint8_t> states = create_segments(grid, blocks, params);
+  if (keep_stages) {
+    r.blocks = blocks;
+    r.created_states = states;
+  }
+  st.begin("refinement");
+  refine_unknown(states, grid, params);
+  refine_boundaries(states, grid, params);
+  if (params.preset == Preset::default_preset) apply_voxel_rules(states, grid, params);
+  st.begin("labelling");
+  label_components(states, grid, r.labels, r.segments);
+  st.end();
+  return r;
+}
+
+std::vector<std::uint8_t> voxel_states(const Result& r) {
+  std::vector<std::uint8_t> s(r.labels.size());
+  for (std::size_t i = 0; i < s.size(); ++i) s[i] = static_cast<std::uint8_t>(r.segments[r.labels[i]].state);
+  return s;
+}
+
+}  // namespace occseg

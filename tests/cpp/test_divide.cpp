@@ -1,0 +1,83 @@
+#include <gtest/gtest.h>
+
+#include "occseg/divide.hpp"
+#include "occseg/histogram.hpp"
+
+using namespace occseg;
+
+TEST(Divide, ShouldSplitFollowsEquation2) {
+  // Three histograms with G(a,b) = G(a,c) = 40 ln 2 and G(b,c) = 0: Gmin = 0 -> split.
+  std::vector<std::uint32_t> a{10, 0}, b{0, 10}, c{0, 10};
+  EXPECT_TRUE(should_split({a.data(), b.data(), c.data()}, 2, 1.2));
+  // Identical histograms: all G = 0 -> uniform, no split.
+  EXPECT_FALSE(should_split({b.data(), c.data()}, 2, 1.2));
+  // One pair only: Gmax = Gmin -> R = 1, never above X = 1.2.
+  EXPECT_FALSE(should_split({a.data(), b.data()}, 2, 1.2));
+  // Fewer than two histograms: no evidence.
+  EXPECT_FALSE(should_split({a.data()}, 2, 1.2));
+  // R just above and below X.
+  std::vector<std::uint32_t> d{30, 10}, e{10, 30}, f{25, 15};
+  const double gde = g_statistic(d.data(), e.data(), 2), gdf = g_statistic(d.data(), f.data(), 2),
+               gef = g_statistic(e.data(), f.data(), 2);
+  const double r = std::max({gde, gdf, gef}) / std::min({gde, gdf, gef});
+  EXPECT_TRUE(should_split({d.data(), e.data(), f.data()}, 2, r * 0.999));
+  EXPECT_FALSE(should_split({d.data(), e.data(), f.data()}, 2, r * 1.001));
+}
+
+TEST(Divide, UniformMapStaysInTopBlocks) {
+  Grid g(Dims{100, 70, 64}, 0.3f);
+  Params p;
+  const std::vector<Block> b = divide(g, compute_texture(g, 8, 1), p);
+  // 2 x 2 x 1 top blocks, clipped by the far faces, none split.
+  ASSERT_EQ(b.size(), 4u);
+  EXPECT_EQ(b[1].lo[0], 64u);
+  EXPECT_EQ(b[1].hi[0], 100u);
+  EXPECT_EQ(b[2].hi[1], 70u);
+  std::uint64_t vol = 0;
+  for (const Block& k : b) vol += k.volume();
+  EXPECT_EQ(vol, g.dims.count());
+}
+
+TEST(Divide, ObjectForcesSplitDownToSmin) {
+  Grid g(Dims{64, 64, 64}, 0.2f);
+  for (int z = 10; z < 14; ++z)
+    for (int y = 10; y < 14; ++y)
+      for (int x = 10; x < 14; ++x) g.at(x, y, z) = 0.9f;
+  Params p;
+  const std::vector<Block> b = divide(g, compute_texture(g, 8, 1), p);
+  bool found_small = false;
+  std::uint64_t vol = 0;
+  for (const Block& k : b) {
+    vol += k.volume();
+    if (k.lo[0] <= 10 && k.hi[0] > 10 && k.lo[1] <= 10 && k.hi[1] > 10 && k.lo[2] <= 10 && k.hi[2] > 10)
+      found_small = (k.hi[0] - k.lo[0]) == 8;
+  }
+  EXPECT_TRUE(found_small);
+  EXPECT_EQ(vol, g.dims.count());
+  EXPECT_GT(b.size(), 8u);
+}
+
+TEST(Divide, TinyAndFlatMapsAreCovered) {
+  for (Dims d : {Dims{1, 1, 1}, Dims{5, 3, 2}, Dims{70, 9, 1}, Dims{1, 1, 130}}) {
+    Grid g(d, 0.1f);
+    g.p[g.p.size() / 2] = 0.9f;
+    const std::vector<Block> b = divide(g, compute_texture(g, 8, 1), Params());
+    std::uint64_t vol = 0;
+    for (const Block& k : b) vol += k.volume();
+    EXPECT_EQ(vol, d.count()) << d.nx << "x" << d.ny << "x" << d.nz;
+  }
+}
+
+TEST(Divide, SameLeavesForAnyThreadCount) {
+  Grid g(Dims{130, 70, 40}, 0.2f);
+  for (std::size_t i = 0; i < g.p.size(); i += 7) g.p[i] = 0.5f + 0.4f * ((i / 7) % 3 == 0);
+  Params p1, p2;
+  p1.threads = 1;
+  p2.threads = 3;
+  const TextureMap t = compute_texture(g, 8, 1);
+  const auto a = divide(g, t, p1), b = divide(g, t, p2);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i)
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(a[i].lo[k], b[i].lo[k]);
+  EXPECT_EQ(compute_texture(g, 8, 4).codes, t.codes);
+}

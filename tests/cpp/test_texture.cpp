@@ -1,0 +1,87 @@
+#include <gtest/gtest.h>
+
+#include "occseg/texture.hpp"
+
+using namespace occseg;
+
+// The paper's Figure 4, in our neighbour order (x-1, x+1, y-1, y+1, z-1, z+1 = weights 1..32):
+// the two neighbours below the centre (2 and 1) sit at weights 1 and 4, the four others
+// (8, 7, 7, 6) at 2, 8, 16 and 32.
+TEST(Texture, PaperFigure4) {
+  const double n[6] = {2, 8, 1, 7, 7, 6};
+  const TextureUnit u = texture_unit(5, n);
+  EXPECT_EQ(u.lbp, 2 + 8 + 16 + 32);
+  EXPECT_DOUBLE_EQ(u.contrast, (8 + 7 + 7 + 6) / 4.0 - (2 + 1) / 2.0);
+  EXPECT_DOUBLE_EQ(u.contrast, 5.5);
+}
+
+TEST(Texture, EqualNeighbourSetsTheBit) {
+  const double n[6] = {0.5, 0.4, 0.6, 0.5, 0.5, 0.5};
+  const TextureUnit u = texture_unit(0.5, n);
+  EXPECT_EQ(u.lbp, 1 + 4 + 8 + 16 + 32);
+  EXPECT_NEAR(u.contrast, (0.5 * 4 + 0.6) / 5 - 0.4, 1e-12);
+}
+
+TEST(Texture, OneSidedUnitHasZeroContrast) {
+  const double up[6] = {0.9, 0.8, 0.7, 0.6, 0.55, 0.51};
+  EXPECT_EQ(texture_unit(0.5, up).lbp, 63);
+  EXPECT_EQ(texture_unit(0.5, up).contrast, 0.0);
+  const double down[6] = {0.1, 0.2, 0.3, 0.4, 0.45, 0.49};
+  EXPECT_EQ(texture_unit(0.5, down).lbp, 0);
+  EXPECT_EQ(texture_unit(0.5, down).contrast, 0.0);
+}
+
+TEST(Texture, AbsentNeighboursTakeNoPart) {
+  const double n[6] = {0.9, 0.1, 0.9, 0.1, 0.0, 1.0};
+  const TextureUnit u = texture_unit(0.5, n, 0x0F);  // a 2D map: no z neighbours
+  EXPECT_EQ(u.lbp, 1 + 4);
+  EXPECT_NEAR(u.contrast, 0.8, 1e-12);
+}
+
+TEST(Texture, QuantizerEqualFrequencyWithTies) {
+  // 8 levels: level 0 for C = 0, levels 1..7 from the non-zero contrasts.
+  std::vector<std::uint64_t> fine(ContrastQuantizer::kFine, 0);
+  for (int f = 1; f <= 7; ++f) fine[f * 100] = 10;  // seven equally common values
+  const ContrastQuantizer q(8, fine);
+  EXPECT_EQ(q.level(0.0), 0);
+  for (int f = 1; f <= 7; ++f) EXPECT_EQ(q.level((f * 100 + 0.5) / ContrastQuantizer::kFine), f) << f;
+  // All mass on one value: every cut sits on it, so it and anything below share level 1, and
+  // contrasts never seen above it go to the top level.
+  std::vector<std::uint64_t> one(ContrastQuantizer::kFine, 0);
+  one[2000] = 1000;
+  const ContrastQuantizer q1(8, one);
+  EXPECT_EQ(q1.level(2000.5 / ContrastQuantizer::kFine), 1);
+  EXPECT_EQ(q1.level(0.01), 1);
+  EXPECT_EQ(q1.level(0.99), 7);
+}
+
+TEST(Texture, CodesSkipBorderVoxels) {
+  Grid g(Dims{4, 3, 3}, 0.2f);
+  g.at(1, 1, 1) = 0.9f;
+  const TextureMap t = compute_texture(g, 8, 1);
+  int inner = 0;
+  for (std::size_t z = 0; z < 3; ++z)
+    for (std::size_t y = 0; y < 3; ++y)
+      for (std::size_t x = 0; x < 4; ++x) {
+        const bool border = x == 0 || x == 3 || y == 0 || y == 2 || z == 0 || z == 2;
+        EXPECT_EQ(t.codes[g.index(x, y, z)] == kNoTexture, border);
+        inner += !border;
+      }
+  EXPECT_EQ(inner, 2);
+  // (1,1,1) is the peak: no neighbour >= 0.9, LBP 0, contrast 0 -> code 0.
+  EXPECT_EQ(t.codes[g.index(1, 1, 1)], 0);
+  // (2,1,1): neighbour x-1 = 0.9 and the five others at 0.2 are all >= 0.2: LBP 63, C = 0.
+  EXPECT_EQ(t.codes[g.index(2, 1, 1)], 63 * 8 + 0);
+}
+
+TEST(Texture, TwoDimensionalMapKeepsInPlaneTexture) {
+  Grid g(Dims{3, 3, 1}, 0.2f);
+  g.at(2, 1, 0) = 0.8f;
+  g.at(1, 0, 0) = 0.1f;
+  const TextureMap t = compute_texture(g, 4, 1);
+  // Only (1,1,0) is interior: x-1 = 0.2, x+1 = 0.8, y+1 = 0.2 are >= 0.2, y-1 = 0.1 is below:
+  // LBP 1+2+8, C = 0.4 - 0.1 = 0.3 > 0.
+  const std::uint16_t c = t.codes[g.index(1, 1, 0)];
+  EXPECT_EQ(c / 4, 11);
+  EXPECT_EQ(c % 4, 1);  // the only non-zero contrast in the map: level 1
+}

@@ -1,0 +1,16 @@
+// Subcommands of the `occseg` tool. Each registers itself on the CLI11 app and returns the
+// callback state main() runs after parsing.
+#pragma once
+#include <CLI/CLI.hpp>
+#include <functional>
+
+namespace occseg::cli {
+
+// Exit codes, documented in README.md.
+enum Exit { kOk = 0, kUsage = 1, kBadInput = 2, kInternal = 3 };
+
+using Runner = std::function<int()>;
+
+Runner add_segment(CLI::App& app);
+
+}  // namespace occseg::cli
