@@ -1,0 +1,304 @@
+/*
+ * occseg.h: the stable C ABI of occseg, texture-based segmentation of 3D probabilistic
+ * occupancy maps.
+ *
+ * One header, opaque handles, plain C99. Link with `pkg-config --cflags --libs occseg` or, from
+ * CMake, `find_package(occseg)` and `target_link_libraries(app PRIVATE occseg::occseg)`.
+ *
+ * Conventions
+ *   - Functions returning `int` return 0 (OCCSEG_OK) on success and a negative OCCSEG_E* code
+ *     on failure. Every failure also sets a message for occseg_last_error() naming the function,
+ *     the argument and the offending value; a success clears it.
+ *   - Output handles (`occseg_map **out`, ...) are set to NULL on failure, so freeing them
+ *     unconditionally is always safe. Every *_free function accepts NULL.
+ *   - No C++ exception, no `bool`, no variadic function and no STL type crosses this ABI.
+ *     Everything that is a macro here (version numbers) is also reachable through a function,
+ *     for foreign-function interfaces that cannot see macros.
+ *   - Structs the library fills (occseg_segment_info) begin with `struct_size`, which the caller
+ *     sets to sizeof(the struct) so later versions can append fields without breaking old callers.
+ *
+ * Thread safety
+ *   - All functions are reentrant. Distinct handles may be used from distinct threads at the
+ *     same time; one map or one result may be read (segmented, queried) by several threads at
+ *     once, as long as no thread modifies it (occseg_map_set_*) meanwhile.
+ *   - An occseg_params object must not be modified (occseg_params_set*, _preset, _set_progress)
+ *     while another thread reads it or passes it to occseg_segment(). occseg_segment() copies
+ *     the parameters at its start, so the object may be changed or freed once it has returned.
+ *   - occseg_last_error() is per thread: it describes the last failing call of the calling thread.
+ *   - The progress callback is called on the thread that called occseg_segment().
+ */
+#ifndef OCCSEG_OCCSEG_H
+#define OCCSEG_OCCSEG_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "occseg/occseg_version.h"
+
+/* OCCSEG_API marks every exported function; the library is built with hidden visibility. */
+#if defined(_WIN32) || defined(__CYGWIN__)
+#  if defined(OCCSEG_BUILDING_LIBRARY)
+#    define OCCSEG_API __declspec(dllexport)
+#  else
+#    define OCCSEG_API __declspec(dllimport)
+#  endif
+#elif defined(__GNUC__) && __GNUC__ >= 4
+#  define OCCSEG_API __attribute__((visibility("default")))
+#else
+#  define OCCSEG_API
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ========================================================================================== */
+/*  Version                                                                                   */
+/* ========================================================================================== */
+
+/* OCCSEG_VERSION_NUMBER of the library actually loaded (major * 10000 + minor * 100 + patch),
+ * which may differ from the header the caller was compiled with. */
+OCCSEG_API uint32_t occseg_version_number(void);
+
+/* "MAJOR.MINOR.PATCH" of the library actually loaded. Static storage, never NULL. */
+OCCSEG_API const char *occseg_version_string(void);
+
+/* ========================================================================================== */
+/*  Errors                                                                                    */
+/* ========================================================================================== */
+
+/* Status codes. The values are pinned: they never change between versions. */
+typedef enum {
+  OCCSEG_OK = 0,
+  OCCSEG_EINVAL = -1,       /* NULL pointer, bad enum, bad stride, bad parameter name or value */
+  OCCSEG_EDIMS = -2,        /* zero, overflowing or too-large dimensions (limit 2^40 voxels) */
+  OCCSEG_EVALUE = -3,       /* NaN, infinity or probability outside [0, 1]; bad voxel size */
+  OCCSEG_ENOMEM = -4,       /* allocation failed */
+  OCCSEG_EIO = -5,          /* file cannot be opened, read or written */
+  OCCSEG_EFORMAT = -6,      /* file is truncated, corrupt or not of the expected format */
+  OCCSEG_ERANGE = -7,       /* index out of range, output buffer too small */
+  OCCSEG_ECANCELLED = -8,   /* the progress callback asked to stop */
+  OCCSEG_EPLUGIN = -9,      /* plugin failed to load or register */
+  OCCSEG_EUNSUPPORTED = -10,/* valid request this build cannot serve */
+  OCCSEG_EINTERNAL = -11    /* a bug: please report it with the occseg_last_error() text */
+} occseg_status;
+
+/* Short description of a status code ("invalid argument", ...). Static storage, never NULL;
+ * "unknown status" for codes that are not an occseg_status. */
+OCCSEG_API const char *occseg_status_string(int code);
+
+/* Symbolic name of a status code ("OCCSEG_EINVAL", ...). Static storage, never NULL;
+ * "OCCSEG_E?" for codes that are not an occseg_status. */
+OCCSEG_API const char *occseg_status_name(int code);
+
+/* Detail of the calling thread's last failure ("" when the last call succeeded or nothing has
+ * failed yet). Never NULL; valid until the thread's next occseg call. */
+OCCSEG_API const char *occseg_last_error(void);
+
+/* ========================================================================================== */
+/*  Parameters                                                                                */
+/* ========================================================================================== */
+
+/* Every setting of the pipeline, by name. Created with the "default" preset. */
+typedef struct occseg_params occseg_params;
+
+/* Progress callback: `stage` is "texture", "division", "creation", "refinement" or "labelling",
+ * `fraction` in [0, 1]. Return 0 to go on, nonzero to cancel: occseg_segment() then returns
+ * OCCSEG_ECANCELLED and produces no result. */
+typedef int (*occseg_progress_fn)(const char *stage, double fraction, void *user);
+
+/* Creates a parameter set holding the "default" preset. */
+OCCSEG_API int occseg_params_create(occseg_params **out);
+
+/* Creates an independent copy of `src` (values and progress callback). */
+OCCSEG_API int occseg_params_copy(occseg_params **out, const occseg_params *src);
+
+/* Frees a parameter set. NULL is a no-op. */
+OCCSEG_API void occseg_params_free(occseg_params *params);
+
+/* Resets every value to a preset: "paper" (as published) or "default" (paper plus per-voxel
+ * safety rules). Keeps the progress callback. Same as occseg_params_set(p, "preset", name). */
+OCCSEG_API int occseg_params_preset(occseg_params *params, const char *name);
+
+/* Sets any parameter from text ("smax", "64"). Unknown names, unparsable text and values outside
+ * the parameter's bounds fail with OCCSEG_EINVAL and leave the value unchanged. */
+OCCSEG_API int occseg_params_set(occseg_params *params, const char *name, const char *value);
+
+/* Typed setters. _int works for "int" and "double" parameters, _double for "double" and (when
+ * the value is integral) "int" parameters, _string for "string" parameters only. */
+OCCSEG_API int occseg_params_set_int(occseg_params *params, const char *name, int64_t value);
+OCCSEG_API int occseg_params_set_double(occseg_params *params, const char *name, double value);
+OCCSEG_API int occseg_params_set_string(occseg_params *params, const char *name, const char *value);
+
+/* Typed getters. _int reads "int" parameters, _double "int" and "double" ones. */
+OCCSEG_API int occseg_params_get_int(const occseg_params *params, const char *name, int64_t *out);
+OCCSEG_API int occseg_params_get_double(const occseg_params *params, const char *name, double *out);
+
+/* Text getters, snprintf-like: `*length` (if not NULL) receives the text's length without the
+ * terminating NUL. With buf == NULL and size == 0 only the length is returned. A buffer smaller
+ * than length + 1 fails with OCCSEG_ERANGE and is left untouched. _get_string reads "string"
+ * parameters only; occseg_params_get reads any parameter as the text occseg_params_set accepts. */
+OCCSEG_API int occseg_params_get_string(const occseg_params *params, const char *name, char *buf,
+                                        size_t size, size_t *length);
+OCCSEG_API int occseg_params_get(const occseg_params *params, const char *name, char *buf,
+                                 size_t size, size_t *length);
+
+/* Installs (or, with fn == NULL, removes) the progress callback used by occseg_segment(). */
+OCCSEG_API int occseg_params_set_progress(occseg_params *params, occseg_progress_fn fn, void *user);
+
+/* Checks the combination of values (smin <= smax, powers of two, free_below <= occupied_above),
+ * which the single setters cannot; occseg_segment() performs the same check. */
+OCCSEG_API int occseg_params_validate(const occseg_params *params);
+
+/* The table of parameters: names, kinds ("int", "double", "string"), bounds and one-line
+ * descriptions, for building user interfaces. Indices run from 0 to occseg_param_count() - 1;
+ * the strings have static storage. Past the end, the string functions return NULL. */
+OCCSEG_API uint32_t occseg_param_count(void);
+OCCSEG_API const char *occseg_param_name(uint32_t index);
+OCCSEG_API const char *occseg_param_kind(uint32_t index);
+OCCSEG_API const char *occseg_param_description(uint32_t index);
+/* Inclusive bounds of a numeric parameter (both 0 for "string" parameters). */
+OCCSEG_API int occseg_param_bounds(uint32_t index, double *min, double *max);
+/* Index of a parameter by name; OCCSEG_EINVAL for unknown names. */
+OCCSEG_API int occseg_param_find(const char *name, uint32_t *index);
+
+/* ========================================================================================== */
+/*  Maps                                                                                      */
+/* ========================================================================================== */
+
+/* A probabilistic occupancy grid: nx * ny * nz occupancy probabilities in [0, 1], a voxel edge
+ * length and the world position of the outer corner of voxel (0, 0, 0). */
+typedef struct occseg_map occseg_map;
+
+/* Element type of a caller's buffer. U8 and U16 map 0..max onto 0..1. */
+typedef enum { OCCSEG_F32 = 0, OCCSEG_F64 = 1, OCCSEG_U8 = 2, OCCSEG_U16 = 3 } occseg_dtype;
+
+/* Flags of occseg_map_from_buffer_flags (bitwise or). */
+typedef enum {
+  OCCSEG_IMPORT_STRICT = 0,      /* F32/F64 values outside [0, 1], infinities and NaN fail */
+  OCCSEG_IMPORT_CLAMP = 1,       /* values below 0 (and -inf) become 0, above 1 (and +inf) 1 */
+  OCCSEG_IMPORT_NAN_UNKNOWN = 2  /* NaN becomes 0.5, i.e. unknown */
+} occseg_import_flags;
+
+/* Copies a caller's 3D array into a new map. Voxel (x, y, z) is read at
+ *   (const char *)data + x * strides[0] + y * strides[1] + z * strides[2]
+ * with strides in bytes (any alignment, negative strides allowed: `data` then points at voxel
+ * (0, 0, 0), not at the lowest address). strides == NULL means dense with x fastest. Strides
+ * that make two voxels overlap (e.g. 0 along an axis of more than one voxel) or whose extent
+ * overflows fail with OCCSEG_EINVAL; axes ordered by |stride| must nest, as in every view
+ * NumPy can produce. Zero or overflowing dims (more than 2^40 voxels) fail with OCCSEG_EDIMS.
+ * F32/F64 values must be probabilities in [0, 1]: the first voxel (x fastest) that is NaN,
+ * infinite or out of range fails with OCCSEG_EVALUE naming it. voxel_size must be positive and
+ * finite (OCCSEG_EVALUE). The origin starts at (0, 0, 0). */
+OCCSEG_API int occseg_map_from_buffer(occseg_map **out, const void *data, occseg_dtype dtype,
+                                      const size_t dims[3] /* nx, ny, nz */,
+                                      const ptrdiff_t strides[3] /* bytes; NULL: dense, x fastest */,
+                                      double voxel_size);
+
+/* As occseg_map_from_buffer, with occseg_import_flags to clamp or accept bad F32/F64 values. */
+OCCSEG_API int occseg_map_from_buffer_flags(occseg_map **out, const void *data, occseg_dtype dtype,
+                                            const size_t dims[3], const ptrdiff_t strides[3],
+                                            double voxel_size, uint32_t flags);
+
+/* Reads a NumPy .npy file (float32, float64, uint8 or uint16, indexed [z, y, x] or [y, x], C or
+ * Fortran order). Voxel size 1, origin (0, 0, 0). OCCSEG_EIO if it cannot be read,
+ * OCCSEG_EFORMAT if it is not a valid .npy map, OCCSEG_EVALUE for bad probabilities. */
+OCCSEG_API int occseg_map_read(occseg_map **out, const char *path);
+
+/* Writes the map's probabilities as a float32 .npy file indexed [z, y, x]; all or nothing. */
+OCCSEG_API int occseg_map_write(const occseg_map *map, const char *path);
+
+/* Frees a map. NULL is a no-op. */
+OCCSEG_API void occseg_map_free(occseg_map *map);
+
+/* Dimensions nx, ny, nz. */
+OCCSEG_API int occseg_map_dims(const occseg_map *map, size_t dims[3]);
+
+/* Edge length of a voxel in metres (positive and finite). */
+OCCSEG_API int occseg_map_voxel_size(const occseg_map *map, double *out);
+OCCSEG_API int occseg_map_set_voxel_size(occseg_map *map, double voxel_size);
+
+/* World position of the outer corner of voxel (0, 0, 0) (finite). */
+OCCSEG_API int occseg_map_origin(const occseg_map *map, double origin[3]);
+OCCSEG_API int occseg_map_set_origin(occseg_map *map, const double origin[3]);
+
+/* Copies the nx * ny * nz probabilities, x fastest, as stored (float). `count` is the capacity
+ * of `out` in elements; less than nx * ny * nz fails with OCCSEG_ERANGE. */
+OCCSEG_API int occseg_map_values(const occseg_map *map, float *out, size_t count);
+
+/* ========================================================================================== */
+/*  Segmentation                                                                              */
+/* ========================================================================================== */
+
+/* The output of occseg_segment(): a segment id per voxel and the segment table. */
+typedef struct occseg_result occseg_result;
+
+/* Voxel and segment states. */
+typedef enum { OCCSEG_FREE = 0, OCCSEG_UNKNOWN = 1, OCCSEG_OCCUPIED = 2 } occseg_state;
+
+/* Runs the whole pipeline (texture, division, creation, refinement, labelling) on a map.
+ * params == NULL uses the "default" preset. The map and the parameters are only read. Fails
+ * with OCCSEG_EINVAL for an inconsistent parameter set, OCCSEG_ECANCELLED when the progress
+ * callback cancels, OCCSEG_ENOMEM when memory runs out. */
+OCCSEG_API int occseg_segment(occseg_result **out, const occseg_map *map, const occseg_params *params);
+
+/* ========================================================================================== */
+/*  Results                                                                                   */
+/* ========================================================================================== */
+
+/* One segment: a 6-connected region of voxels of one state. */
+typedef struct {
+  uint32_t struct_size;   /* set by the caller to sizeof(occseg_segment_info) */
+  uint32_t id;            /* equals its index in the table and its label in the label array */
+  occseg_state state;
+  uint64_t voxels;        /* number of voxels */
+  double mop;             /* mean occupancy probability of its voxels */
+  uint32_t bbox_min[3], bbox_max[3];  /* voxel indices (x, y, z), both inclusive */
+  double centroid[3];     /* mean voxel index (x, y, z) */
+} occseg_segment_info;
+
+/* Frees a result. NULL is a no-op. */
+OCCSEG_API void occseg_result_free(occseg_result *result);
+
+/* Dimensions nx, ny, nz of the segmented map. */
+OCCSEG_API int occseg_result_dims(const occseg_result *result, size_t dims[3]);
+
+/* Number of segments (0 for a NULL result, which also sets occseg_last_error()). */
+OCCSEG_API uint32_t occseg_result_segment_count(const occseg_result *result);
+
+/* Fills `*out` with segment `index` (0 .. count - 1; OCCSEG_ERANGE beyond). out->struct_size
+ * must be set to sizeof(occseg_segment_info) of a version of this header; any other value
+ * fails with OCCSEG_EINVAL. */
+OCCSEG_API int occseg_result_segment(const occseg_result *result, uint32_t index,
+                                     occseg_segment_info *out);
+
+/* Copies nx * ny * nz labels (segment ids), x fastest. `count` is the capacity of `out` in
+ * elements; less than nx * ny * nz fails with OCCSEG_ERANGE. */
+OCCSEG_API int occseg_result_labels(const occseg_result *result, uint32_t *out, size_t count);
+
+/* Copies nx * ny * nz voxel states (occseg_state values), x fastest; `count` as above. */
+OCCSEG_API int occseg_result_states(const occseg_result *result, uint8_t *out, size_t count);
+
+/* Wall-clock time of each pipeline stage, in order. `*stage` points into the result and lives
+ * as long as it. Either output pointer may be NULL. */
+OCCSEG_API uint32_t occseg_result_stage_count(const occseg_result *result);
+OCCSEG_API int occseg_result_stage(const occseg_result *result, uint32_t index, const char **stage,
+                                   double *seconds);
+
+/* Writes `dir`/labels.npy (uint32 [z, y, x]) and `dir`/segments.json, the same files as
+ * `occseg segment --out dir`, creating `dir` (not its parents) if missing. Each file is written
+ * to a temporary name and renamed when complete; if segments.json fails, labels.npy is removed,
+ * so a failure never leaves a partial file or a mismatched pair. */
+OCCSEG_API int occseg_result_write(const occseg_result *result, const char *dir);
+
+/* ========================================================================================== */
+/*  Plugins                                                                                   */
+/* ========================================================================================== */
+
+/* Reserved for the plugin interface (occseg_plugins_load, ...), added in a later version. */
+
+#ifdef __cplusplus
+} /* extern "C" */
+#endif
+
+#endif /* OCCSEG_OCCSEG_H */

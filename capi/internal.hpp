@@ -1,0 +1,62 @@
+// Shared by the capi/*.cpp files: the structs behind the opaque handles and the one place that
+// turns C++ exceptions into status codes, so no exception ever crosses the C ABI.
+#pragma once
+#include <exception>
+#include <new>
+#include <stdexcept>
+#include <string>
+
+#include "occseg/error.hpp"
+#include "occseg/grid.hpp"
+#include "occseg/occseg.h"
+#include "occseg/params.hpp"
+#include "occseg/segment.hpp"
+
+struct occseg_params {
+  occseg::Params params;  // params.progress stays empty: the C callback is wired in at segment time
+  occseg_progress_fn progress = nullptr;
+  void* progress_user = nullptr;
+};
+
+struct occseg_map {
+  occseg::Grid grid;
+};
+
+struct occseg_result {
+  occseg::Result result;
+  std::string preset;  // for segments.json
+};
+
+namespace occseg::capi {
+
+// The calling thread's last-error text. Fixed storage: setting it never allocates or throws.
+void clear_error() noexcept;
+// Sets the error to "function: prefix message" and returns `code`.
+int fail(const char* function, int code, const char* message, const char* prefix = "") noexcept;
+
+// Throws Error(invalid_argument) "argument 'name' is NULL" when p is NULL.
+inline void require(const void* p, const char* name) {
+  if (!p) throw Error(Status::invalid_argument, std::string("argument '") + name + "' is NULL");
+}
+
+// Runs `body`; returns 0 and clears the error on success, or the status of whatever it threw.
+template <class Body>
+int guard(const char* function, Body&& body) noexcept {
+  try {
+    body();
+    clear_error();
+    return 0;
+  } catch (const Error& e) {
+    return fail(function, static_cast<int>(e.status()), e.what());
+  } catch (const std::bad_alloc&) {
+    return fail(function, static_cast<int>(Status::no_memory), "out of memory");
+  } catch (const std::length_error&) {  // a container asked for more than it can hold
+    return fail(function, static_cast<int>(Status::no_memory), "out of memory (size limit)");
+  } catch (const std::exception& e) {
+    return fail(function, static_cast<int>(Status::internal), e.what(), "internal error: ");
+  } catch (...) {
+    return fail(function, static_cast<int>(Status::internal), "internal error: unknown exception");
+  }
+}
+
+}  // namespace occseg::capi

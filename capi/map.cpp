@@ -1,0 +1,240 @@
+// occseg_map_*: maps from caller buffers (any dtype, any non-overlapping strides) and .npy files.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <memory>
+
+#include "internal.hpp"
+#include "occseg/npy.hpp"
+
+using occseg::Dims;
+using occseg::Error;
+using occseg::Status;
+using occseg::capi::guard;
+using occseg::capi::require;
+
+namespace {
+
+[[noreturn]] void invalid(const std::string& message) { throw Error(Status::invalid_argument, message); }
+
+std::size_t item_size(int dtype) {
+  switch (dtype) {
+    case OCCSEG_F32: return 4;
+    case OCCSEG_F64: return 8;
+    case OCCSEG_U8: return 1;
+    case OCCSEG_U16: return 2;
+    default: invalid("dtype " + std::to_string(dtype) + " is not an occseg_dtype (OCCSEG_F32 .. OCCSEG_U16)");
+  }
+}
+
+void check_voxel_size(double v) {
+  if (!(v > 0) || !std::isfinite(v)) {
+    char t[64];
+    std::snprintf(t, sizeof t, "%g", v);
+    throw Error(Status::bad_value, std::string("voxel_size ") + t + " is not a positive finite number");
+  }
+}
+
+// Rejects strides under which two voxels would share bytes, or whose extent overflows
+// ptrdiff_t. Sufficient test: ordered by |stride|, each axis must step over the whole extent
+// of the finer ones (true of every C, Fortran, sliced, transposed or flipped array).
+void check_strides(const Dims& d, const ptrdiff_t s[3], std::size_t item) {
+  const std::size_t n[3] = {d.nx, d.ny, d.nz};
+  int order[3] = {0, 1, 2};
+  std::sort(order, order + 3, [&](int a, int b) {
+    return s[a] == std::numeric_limits<ptrdiff_t>::min() ? false
+           : s[b] == std::numeric_limits<ptrdiff_t>::min() ? true
+                                                            : std::llabs(s[a]) < std::llabs(s[b]);
+  });
+  std::size_t extent = item;  // bytes covered by the finer axes, from the lowest to past the highest
+  const std::size_t limit = static_cast<std::size_t>(std::numeric_limits<ptrdiff_t>::max());
+  for (int k : order) {
+    if (n[k] == 1) continue;  // the stride of a single-voxel axis is never used
+    const std::string which = "strides[" + std::to_string(k) + "] = " + std::to_string(s[k]);
+    if (s[k] == std::numeric_limits<ptrdiff_t>::min()) invalid(which + " overflows");
+    const std::size_t step = static_cast<std::size_t>(std::llabs(s[k]));
+    if (step < extent)
+      invalid(which + " makes voxels overlap (each step must skip the " + std::to_string(extent) +
+              " bytes spanned by the finer axes)");
+    std::size_t span;
+    if (__builtin_mul_overflow(step, n[k] - 1, &span) || __builtin_add_overflow(span, extent, &extent) ||
+        extent > limit)
+      invalid(which + " makes the map span more bytes than an address can hold");
+  }
+}
+
+template <class T>
+T load(const char* p) {
+  T v;
+  std::memcpy(&v, p, sizeof v);  // any alignment
+  return v;
+}
+
+[[noreturn]] void bad_value(std::size_t x, std::size_t y, std::size_t z, double v) {
+  const char* what = std::isnan(v) ? "is NaN" : (std::isinf(v) ? "is infinite" : "is outside [0, 1]");
+  char t[64];
+  std::snprintf(t, sizeof t, "%.9g", v);
+  throw Error(Status::bad_value, "data: probability at voxel (" + std::to_string(x) + ", " + std::to_string(y) +
+                                     ", " + std::to_string(z) + ") = " + t + " " + what +
+                                     " (pass OCCSEG_IMPORT_CLAMP or OCCSEG_IMPORT_NAN_UNKNOWN to accept it)");
+}
+
+// One F32/F64 value as a probability, per the import flags.
+float probability(double v, uint32_t flags, std::size_t x, std::size_t y, std::size_t z) {
+  if (v >= 0.0 && v <= 1.0) return static_cast<float>(v);
+  if (std::isnan(v)) {
+    if (flags & OCCSEG_IMPORT_NAN_UNKNOWN) return 0.5f;
+  } else if (flags & OCCSEG_IMPORT_CLAMP) {
+    return v < 0.0 ? 0.0f : 1.0f;
+  }
+  bad_value(x, y, z, v);
+}
+
+void convert(occseg::Grid& g, const char* base, int dtype, const ptrdiff_t s[3], uint32_t flags) {
+  const Dims& d = g.dims;
+  float* out = g.p.data();
+  for (std::size_t z = 0; z < d.nz; ++z)
+    for (std::size_t y = 0; y < d.ny; ++y) {
+      const char* row = base + static_cast<ptrdiff_t>(z) * s[2] + static_cast<ptrdiff_t>(y) * s[1];
+      for (std::size_t x = 0; x < d.nx; ++x, ++out) {
+        const char* e = row + static_cast<ptrdiff_t>(x) * s[0];
+        switch (dtype) {
+          case OCCSEG_F32: *out = probability(load<float>(e), flags, x, y, z); break;
+          case OCCSEG_F64: *out = probability(load<double>(e), flags, x, y, z); break;
+          // Same conversion as the .npy reader, so both paths give identical maps.
+          case OCCSEG_U8: *out = static_cast<float>(load<uint8_t>(e) / 255.0); break;
+          default: *out = static_cast<float>(load<uint16_t>(e) / 65535.0); break;
+        }
+      }
+    }
+}
+
+void dims_out(const Dims& d, size_t dims[3]) {
+  dims[0] = d.nx;
+  dims[1] = d.ny;
+  dims[2] = d.nz;
+}
+
+}  // namespace
+
+extern "C" {
+
+int occseg_map_from_buffer_flags(occseg_map** out, const void* data, occseg_dtype dtype, const size_t dims[3],
+                                 const ptrdiff_t strides[3], double voxel_size, uint32_t flags) {
+  return guard("occseg_map_from_buffer", [&] {
+    require(out, "out");
+    *out = nullptr;
+    require(data, "data");
+    require(dims, "dims");
+    const std::size_t item = item_size(static_cast<int>(dtype));
+    if (flags & ~uint32_t(OCCSEG_IMPORT_CLAMP | OCCSEG_IMPORT_NAN_UNKNOWN))
+      invalid("flags " + std::to_string(flags) + " has bits that are no occseg_import_flags");
+    const Dims d{dims[0], dims[1], dims[2]};
+    occseg::check_dims(d);
+    check_voxel_size(voxel_size);
+    ptrdiff_t s[3];
+    if (strides) {
+      std::copy(strides, strides + 3, s);
+      check_strides(d, s, item);
+    } else {  // dense: fits, since check_dims bounds the voxel count by 2^40
+      s[0] = static_cast<ptrdiff_t>(item);
+      s[1] = s[0] * static_cast<ptrdiff_t>(d.nx);
+      s[2] = s[1] * static_cast<ptrdiff_t>(d.ny);
+    }
+    auto m = std::make_unique<occseg_map>();
+    m->grid.dims = d;
+    m->grid.voxel_size = voxel_size;
+    m->grid.p.resize(d.count());
+    convert(m->grid, static_cast<const char*>(data), static_cast<int>(dtype), s, flags);
+    *out = m.release();
+  });
+}
+
+int occseg_map_from_buffer(occseg_map** out, const void* data, occseg_dtype dtype, const size_t dims[3],
+                           const ptrdiff_t strides[3], double voxel_size) {
+  return occseg_map_from_buffer_flags(out, data, dtype, dims, strides, voxel_size, OCCSEG_IMPORT_STRICT);
+}
+
+int occseg_map_read(occseg_map** out, const char* path) {
+  return guard("occseg_map_read", [&] {
+    require(out, "out");
+    *out = nullptr;
+    require(path, "path");
+    auto m = std::make_unique<occseg_map>();
+    m->grid = occseg::grid_from_npy(occseg::read_npy(path), 1.0, path);
+    *out = m.release();
+  });
+}
+
+int occseg_map_write(const occseg_map* map, const char* path) {
+  return guard("occseg_map_write", [&] {
+    require(map, "map");
+    require(path, "path");
+    occseg::write_grid_npy(path, map->grid);
+  });
+}
+
+void occseg_map_free(occseg_map* map) { delete map; }
+
+int occseg_map_dims(const occseg_map* map, size_t dims[3]) {
+  return guard("occseg_map_dims", [&] {
+    require(map, "map");
+    require(dims, "dims");
+    dims_out(map->grid.dims, dims);
+  });
+}
+
+int occseg_map_voxel_size(const occseg_map* map, double* out) {
+  return guard("occseg_map_voxel_size", [&] {
+    require(map, "map");
+    require(out, "out");
+    *out = map->grid.voxel_size;
+  });
+}
+
+int occseg_map_set_voxel_size(occseg_map* map, double voxel_size) {
+  return guard("occseg_map_set_voxel_size", [&] {
+    require(map, "map");
+    check_voxel_size(voxel_size);
+    map->grid.voxel_size = voxel_size;
+  });
+}
+
+int occseg_map_origin(const occseg_map* map, double origin[3]) {
+  return guard("occseg_map_origin", [&] {
+    require(map, "map");
+    require(origin, "origin");
+    std::copy(map->grid.origin.begin(), map->grid.origin.end(), origin);
+  });
+}
+
+int occseg_map_set_origin(occseg_map* map, const double origin[3]) {
+  return guard("occseg_map_set_origin", [&] {
+    require(map, "map");
+    require(origin, "origin");
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(origin[k])) {
+        char t[64];
+        std::snprintf(t, sizeof t, "%g", origin[k]);
+        throw Error(Status::bad_value, "origin[" + std::to_string(k) + "] = " + t + " is not finite");
+      }
+    std::copy(origin, origin + 3, map->grid.origin.begin());
+  });
+}
+
+int occseg_map_values(const occseg_map* map, float* out, size_t count) {
+  return guard("occseg_map_values", [&] {
+    require(map, "map");
+    require(out, "out");
+    const std::vector<float>& p = map->grid.p;
+    if (count < p.size())
+      throw Error(Status::out_of_range, "count " + std::to_string(count) + " is smaller than the " +
+                                            std::to_string(p.size()) + " voxels of the map");
+    std::copy(p.begin(), p.end(), out);
+  });
+}
+
+}  // extern "C"
+

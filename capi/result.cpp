@@ -1,0 +1,132 @@
+// occseg_segment and the occseg_result_* accessors.
+#include <algorithm>
+#include <memory>
+
+#include "internal.hpp"
+
+using occseg::Error;
+using occseg::Status;
+using occseg::capi::guard;
+using occseg::capi::require;
+
+namespace {
+
+// Throws Error(out_of_range) unless `count` elements hold one value per voxel.
+void check_capacity(const occseg_result* r, std::size_t count) {
+  const std::size_t n = r->result.labels.size();
+  if (count < n)
+    throw Error(Status::out_of_range, "count " + std::to_string(count) + " is smaller than the " +
+                                          std::to_string(n) + " voxels of the result");
+}
+
+}  // namespace
+
+extern "C" {
+
+int occseg_segment(occseg_result** out, const occseg_map* map, const occseg_params* params) {
+  return guard("occseg_segment", [&] {
+    require(out, "out");
+    *out = nullptr;
+    require(map, "map");
+    occseg::Params p = params ? params->params : occseg::Params::defaults();
+    if (params && params->progress) {
+      const occseg_progress_fn fn = params->progress;
+      void* const user = params->progress_user;
+      p.progress = [fn, user](const char* stage, double fraction) { return fn(stage, fraction, user) == 0; };
+    }
+    auto r = std::make_unique<occseg_result>();
+    r->result = occseg::segment(map->grid, p);
+    r->preset = occseg::preset_name(p.preset);
+    *out = r.release();
+  });
+}
+
+void occseg_result_free(occseg_result* result) { delete result; }
+
+int occseg_result_dims(const occseg_result* result, size_t dims[3]) {
+  return guard("occseg_result_dims", [&] {
+    require(result, "result");
+    require(dims, "dims");
+    dims[0] = result->result.dims.nx;
+    dims[1] = result->result.dims.ny;
+    dims[2] = result->result.dims.nz;
+  });
+}
+
+uint32_t occseg_result_segment_count(const occseg_result* result) {
+  uint32_t n = 0;
+  guard("occseg_result_segment_count", [&] {
+    require(result, "result");
+    n = static_cast<uint32_t>(result->result.segments.size());
+  });
+  return n;
+}
+
+int occseg_result_segment(const occseg_result* result, uint32_t index, occseg_segment_info* out) {
+  return guard("occseg_result_segment", [&] {
+    require(result, "result");
+    require(out, "out");
+    // Only one layout exists so far; later versions will also accept this size.
+    if (out->struct_size != sizeof(occseg_segment_info))
+      throw Error(Status::invalid_argument, "out->struct_size " + std::to_string(out->struct_size) +
+                                                " is not sizeof(occseg_segment_info) = " +
+                                                std::to_string(sizeof(occseg_segment_info)));
+    const auto& segs = result->result.segments;
+    if (index >= segs.size())
+      throw Error(Status::out_of_range, "index " + std::to_string(index) + " is out of range (the result has " +
+                                            std::to_string(segs.size()) + " segments)");
+    const occseg::Segment& s = segs[index];
+    out->id = s.id;
+    out->state = static_cast<occseg_state>(s.state);
+    out->voxels = s.voxels;
+    out->mop = s.mop;
+    for (int k = 0; k < 3; ++k) {
+      out->bbox_min[k] = s.bbox_min[k];
+      out->bbox_max[k] = s.bbox_max[k];
+      out->centroid[k] = s.centroid[k];
+    }
+  });
+}
+
+int occseg_result_labels(const occseg_result* result, uint32_t* out, size_t count) {
+  return guard("occseg_result_labels", [&] {
+    require(result, "result");
+    require(out, "out");
+    check_capacity(result, count);
+    std::copy(result->result.labels.begin(), result->result.labels.end(), out);
+  });
+}
+
+int occseg_result_states(const occseg_result* result, uint8_t* out, size_t count) {
+  return guard("occseg_result_states", [&] {
+    require(result, "result");
+    require(out, "out");
+    check_capacity(result, count);
+    const auto& labels = result->result.labels;
+    const auto& segs = result->result.segments;
+    for (std::size_t i = 0; i < labels.size(); ++i) out[i] = static_cast<uint8_t>(segs[labels[i]].state);
+  });
+}
+
+uint32_t occseg_result_stage_count(const occseg_result* result) {
+  uint32_t n = 0;
+  guard("occseg_result_stage_count", [&] {
+    require(result, "result");
+    n = static_cast<uint32_t>(result->result.timings.size());
+  });
+  return n;
+}
+
+int occseg_result_stage(const occseg_result* result, uint32_t index, const char** stage, double* seconds) {
+  return guard("occseg_result_stage", [&] {
+    require(result, "result");
+    const auto& t = result->result.timings;
+    if (index >= t.size())
+      throw Error(Status::out_of_range, "index " + std::to_string(index) + " is out of range (the result has " +
+                                            std::to_string(t.size()) + " stages)");
+    if (stage) *stage = t[index].stage.c_str();
+    if (seconds) *seconds = t[index].seconds;
+  });
+}
+
+}  // extern "C"
