@@ -1,0 +1,13 @@
+# ctest fixture: configures and builds tests/c/outside against the installed occseg only
+# (CMAKE_PREFIX_PATH = the test prefix).  -DSRC=... -DBIN=... -DPREFIX=... -DCC=... -DCXX=...
+file(REMOVE_RECURSE ${BIN})
+execute_process(COMMAND ${CMAKE_COMMAND} -S ${SRC} -B ${BIN} -DCMAKE_PREFIX_PATH=${PREFIX}
+                        -DCMAKE_C_COMPILER=${CC} -DCMAKE_CXX_COMPILER=${CXX} -DCMAKE_BUILD_TYPE=Debug
+                RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "configuring the outside project failed (${rc})")
+endif()
+execute_process(COMMAND ${CMAKE_COMMAND} --build ${BIN} -j2 RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "building the outside project failed (${rc})")
+endif()
