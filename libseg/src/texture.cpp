@@ -8,6 +8,8 @@
 namespace occseg {
 
 TextureUnit texture_unit(double centre, const double n[6], unsigned present) {
+  // The same arithmetic as the vectorised row kernel below: masked sums in neighbour order
+  // (adding 0.0 for the other side is exact), so both give bit-identical contrasts.
   TextureUnit u;
   double sum1 = 0, sum0 = 0;
   int n1 = 0, n0 = 0;
@@ -55,34 +57,106 @@ ContrastQuantizer::ContrastQuantizer(int bins, const std::vector<std::uint64_t>&
 
 namespace {
 
-// Visits the texture unit of every interior voxel of z-slices [z0, z1). An axis of size 1 is
-// not a border: its neighbours are simply absent (2D maps keep a 4-neighbour texture).
-template <class F>
-void for_each_unit(const Grid& g, std::size_t z0, std::size_t z1, F&& f) {
-  const std::size_t nx = g.dims.nx, ny = g.dims.ny, nz = g.dims.nz;
-  const std::ptrdiff_t sy = static_cast<std::ptrdiff_t>(nx), sz = static_cast<std::ptrdiff_t>(nx * ny);
-  const bool fx = nx == 1, fy = ny == 1, fz = nz == 1;
-  const unsigned present = (fx ? 0u : 3u) | (fy ? 0u : 12u) | (fz ? 0u : 48u);
-  const float* p = g.p.data();
-  for (std::size_t z = z0; z < z1; ++z) {
-    const bool bz = !fz && (z == 0 || z == nz - 1);
-    for (std::size_t y = 0; y < ny; ++y) {
-      const bool by = !fy && (y == 0 || y == ny - 1);
-      for (std::size_t x = 0; x < nx; ++x) {
-        const std::size_t i = x + nx * (y + ny * z);
-        if (bz || by || (!fx && (x == 0 || x == nx - 1))) {
-          f(i, nullptr);
-          continue;
-        }
-        double nb[6] = {0, 0, 0, 0, 0, 0};
-        if (!fx) { nb[0] = p[i - 1]; nb[1] = p[i + 1]; }
-        if (!fy) { nb[2] = p[i - sy]; nb[3] = p[i + sy]; }
-        if (!fz) { nb[4] = p[i - sz]; nb[5] = p[i + sz]; }
-        const TextureUnit u = texture_unit(p[i], nb, present);
-        f(i, &u);
-      }
-    }
+// Offsets of the six neighbours; an absent neighbour (axis of size 1) has offset 0 and is masked
+// out by `present`.
+struct Stencil {
+  std::ptrdiff_t off[6];
+  unsigned present;
+};
+
+// Fine contrast step + 1 of `n` consecutive interior voxels starting at p (0: C <= 0), written
+// to out. Branchless so that it vectorises (4 doubles per lane group); the arithmetic is exactly
+// texture_unit()'s: neighbours compared in double, sums in neighbour order, exact division.
+template <unsigned Present>
+inline void contrast_row_impl(const float* p, const std::ptrdiff_t* off, std::size_t n, std::uint16_t* out) {
+  const std::ptrdiff_t o0 = off[0], o1 = off[1], o2 = off[2], o3 = off[3], o4 = off[4], o5 = off[5];
+  for (std::size_t x = 0; x < n; ++x) {
+    const double c = p[x];
+    double s1 = 0, s0 = 0, n1 = 0, n0 = 0;
+#define OCCSEG_NB(K, O)                         \
+  if (Present & (1u << K)) {                    \
+    const double v = p[x + O];                  \
+    const bool up = v >= c;                     \
+    s1 += up ? v : 0.0;                         \
+    s0 += up ? 0.0 : v;                         \
+    n1 += up ? 1.0 : 0.0;                       \
+    n0 += up ? 0.0 : 1.0;                       \
   }
+    OCCSEG_NB(0, o0) OCCSEG_NB(1, o1) OCCSEG_NB(2, o2) OCCSEG_NB(3, o3) OCCSEG_NB(4, o4) OCCSEG_NB(5, o5)
+#undef OCCSEG_NB
+    const double con = s1 / (n1 > 0 ? n1 : 1.0) - s0 / (n0 > 0 ? n0 : 1.0);
+    const bool two_sided = n1 > 0 && n0 > 0 && con > 0;
+    double f = con * ContrastQuantizer::kFine;
+    f = f < ContrastQuantizer::kFine - 1 ? f : ContrastQuantizer::kFine - 1;
+    out[x] = two_sided ? static_cast<std::uint16_t>(static_cast<int>(f) + 1) : 0;
+  }
+}
+
+// LBP codes of `n` consecutive interior voxels.
+template <unsigned Present>
+inline void lbp_row_impl(const float* p, const std::ptrdiff_t* off, std::size_t n, std::uint8_t* out) {
+  const std::ptrdiff_t o0 = off[0], o1 = off[1], o2 = off[2], o3 = off[3], o4 = off[4], o5 = off[5];
+  for (std::size_t x = 0; x < n; ++x) {
+    const float c = p[x];
+    std::uint8_t l = 0;
+#define OCCSEG_BIT(K, O) \
+  if (Present & (1u << K)) l |= p[x + O] >= c ? std::uint8_t(1u << K) : std::uint8_t(0);
+    OCCSEG_BIT(0, o0) OCCSEG_BIT(1, o1) OCCSEG_BIT(2, o2) OCCSEG_BIT(3, o3) OCCSEG_BIT(4, o4) OCCSEG_BIT(5, o5)
+#undef OCCSEG_BIT
+    out[x] = l;
+  }
+}
+
+// The hot 3D kernels, compiled for AVX2 and for baseline x86-64 with run-time dispatch.
+__attribute__((target_clones("avx2", "default")))
+void contrast_row_3d(const float* p, const std::ptrdiff_t* off, std::size_t n, std::uint16_t* out) {
+  contrast_row_impl<63>(p, off, n, out);
+}
+__attribute__((target_clones("avx2", "default")))
+void lbp_row_3d(const float* p, const std::ptrdiff_t* off, std::size_t n, std::uint8_t* out) {
+  lbp_row_impl<63>(p, off, n, out);
+}
+
+// Other neighbourhoods (maps with an axis of size 1) are small: no dispatch.
+template <unsigned P>
+void contrast_any(const float* p, const std::ptrdiff_t* off, std::size_t n, std::uint16_t* out, unsigned present) {
+  if constexpr (P == 64) {
+    (void)p, (void)off, (void)n, (void)out, (void)present;
+  } else if (present == P) {
+    if (P == 63) contrast_row_3d(p, off, n, out);
+    else contrast_row_impl<P>(p, off, n, out);
+  } else {
+    contrast_any<P + 1>(p, off, n, out, present);
+  }
+}
+template <unsigned P>
+void lbp_any(const float* p, const std::ptrdiff_t* off, std::size_t n, std::uint8_t* out, unsigned present) {
+  if constexpr (P == 64) {
+    (void)p, (void)off, (void)n, (void)out, (void)present;
+  } else if (present == P) {
+    if (P == 63) lbp_row_3d(p, off, n, out);
+    else lbp_row_impl<P>(p, off, n, out);
+  } else {
+    lbp_any<P + 1>(p, off, n, out, present);
+  }
+}
+
+// Interior voxels of row (y, z): [x0, x1) along x. Returns false for rows on an outer face.
+bool interior_row(const Dims& d, std::size_t y, std::size_t z, std::size_t& x0, std::size_t& x1) {
+  const bool fx = d.nx == 1, fy = d.ny == 1, fz = d.nz == 1;
+  if (!fz && (z == 0 || z == d.nz - 1)) return false;
+  if (!fy && (y == 0 || y == d.ny - 1)) return false;
+  x0 = fx ? 0 : 1;
+  x1 = fx ? 1 : d.nx - 1;
+  return x0 < x1;
+}
+
+Stencil stencil(const Dims& d) {
+  const bool hx = d.nx > 1, hy = d.ny > 1, hz = d.nz > 1;
+  const auto sy = static_cast<std::ptrdiff_t>(d.nx), sz = static_cast<std::ptrdiff_t>(d.nx * d.ny);
+  Stencil s{{hx ? -1 : 0, hx ? 1 : 0, hy ? -sy : 0, hy ? sy : 0, hz ? -sz : 0, hz ? sz : 0},
+            (hx ? 3u : 0u) | (hy ? 12u : 0u) | (hz ? 48u : 0u)};
+  return s;
 }
 
 }  // namespace
@@ -91,28 +165,57 @@ TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads) {
   if (contrast_bins < 2 || contrast_bins > 64)
     throw Error(Status::invalid_argument, "contrast_bins = " + std::to_string(contrast_bins) +
                                               " is outside [2, 64]");
-  const std::size_t nz = grid.dims.nz;
+  const Dims& d = grid.dims;
+  const std::size_t nx = d.nx, ny = d.ny, nz = d.nz;
+  const Stencil sten = stencil(d);
+  TextureMap tm;
+  tm.bins = contrast_bins;
+  tm.codes.resize(d.count());
+  std::uint16_t* codes = tm.codes.data();
+  const float* p = grid.p.data();
+  // Pass 1: fine contrast step + 1 of every interior voxel, parked in the code array, and the
+  // distribution of non-zero contrasts (per-chunk histograms summed in chunk order: integer counts,
+  // so the total is exact for any thread count).
   const int t = std::max(1, std::min<int>(resolve_threads(threads), static_cast<int>(nz)));
-  // Pass 1: distribution of non-zero contrasts on the fine grid, summed in a fixed order.
-  std::vector<std::vector<std::uint64_t>> part(t, std::vector<std::uint64_t>(ContrastQuantizer::kFine, 0));
+  std::vector<std::vector<std::uint64_t>> part(t, std::vector<std::uint64_t>(ContrastQuantizer::kFine + 1, 0));
   parallel_for(static_cast<std::size_t>(t), t, [&](std::size_t b, std::size_t e) {
-    for (std::size_t k = b; k < e; ++k)
-      for_each_unit(grid, nz * k / t, nz * (k + 1) / t, [&](std::size_t, const TextureUnit* u) {
-        if (u && u->contrast > 0) ++part[k][ContrastQuantizer::fine_step(u->contrast)];
-      });
+    for (std::size_t k = b; k < e; ++k) {
+      std::uint64_t* h = part[k].data();
+      for (std::size_t z = nz * k / t; z < nz * (k + 1) / t; ++z)
+        for (std::size_t y = 0; y < ny; ++y) {
+          std::uint16_t* row = codes + nx * (y + ny * z);
+          std::size_t x0 = 0, x1 = 0;
+          if (!interior_row(d, y, z, x0, x1)) {
+            std::fill(row, row + nx, kNoTexture);
+            continue;
+          }
+          std::fill(row, row + x0, kNoTexture);
+          std::fill(row + x1, row + nx, kNoTexture);
+          contrast_any<0>(p + nx * (y + ny * z) + x0, sten.off, x1 - x0, row + x0, sten.present);
+          // Flat regions (step 0) would chain every increment through one counter: skip them.
+          for (std::size_t x = x0; x < x1; ++x)
+            if (row[x]) ++h[row[x]];
+        }
+    }
   });
   std::vector<std::uint64_t> fine(ContrastQuantizer::kFine, 0);
   for (auto& h : part)
-    for (int f = 0; f < ContrastQuantizer::kFine; ++f) fine[f] += h[f];
+    for (int f = 0; f < ContrastQuantizer::kFine; ++f) fine[f] += h[f + 1];
   const ContrastQuantizer q(contrast_bins, fine);
-  // Pass 2: codes.
-  TextureMap tm;
-  tm.bins = contrast_bins;
-  tm.codes.resize(grid.dims.count());
+  // Pass 2: codes = lbp * bins + level, the level looked up from the parked fine step.
+  std::vector<std::uint16_t> level(ContrastQuantizer::kFine + 1, 0);
+  for (int f = 0; f < ContrastQuantizer::kFine; ++f) level[f + 1] = static_cast<std::uint16_t>(q.level_of_step(f));
   parallel_for(nz, threads, [&](std::size_t z0, std::size_t z1) {
-    for_each_unit(grid, z0, z1, [&](std::size_t i, const TextureUnit* u) {
-      tm.codes[i] = u ? static_cast<std::uint16_t>(u->lbp * contrast_bins + q.level(u->contrast)) : kNoTexture;
-    });
+    std::vector<std::uint8_t> lbp(nx);
+    for (std::size_t z = z0; z < z1; ++z)
+      for (std::size_t y = 0; y < ny; ++y) {
+        std::size_t x0 = 0, x1 = 0;
+        if (!interior_row(d, y, z, x0, x1)) continue;
+        std::uint16_t* row = codes + nx * (y + ny * z);
+        lbp_any<0>(p + nx * (y + ny * z) + x0, sten.off, x1 - x0, lbp.data(), sten.present);
+        for (std::size_t x = x0; x < x1; ++x)
+          row[x] = static_cast<std::uint16_t>(lbp[x - x0] * contrast_bins + level[row[x]]);
+      }
   });
   return tm;
 }

@@ -35,6 +35,9 @@ class ContrastQuantizer {
     return f < 0 ? 0 : (f >= kFine ? kFine - 1 : f);
   }
   int level(double c) const { return c <= 0 ? 0 : lut_[fine_step(c)]; }
+  // The level of a non-zero contrast whose fine step is `step` (0..kFine-1): level(c) for c > 0
+  // is level_of_step(fine_step(c)).
+  int level_of_step(int step) const { return lut_[step]; }
 
  private:
   int bins_ = 0;
