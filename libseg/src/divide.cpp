@@ -1,6 +1,7 @@
 #include "occseg/divide.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "occseg/error.hpp"
@@ -25,13 +26,57 @@ bool should_split(const std::vector<const std::uint32_t*>& h, std::size_t bins, 
 
 namespace {
 
+// k ln k for integer counts, looked up: the same expression as g_statistic()'s xlogx, so the
+// values are identical; counts beyond the table (blocks above 32^3 voxels) are computed.
+class XLogX {
+ public:
+  XLogX() : t_(kSize) {
+    t_[0] = 0.0;
+    for (std::size_t k = 1; k < kSize; ++k) t_[k] = static_cast<double>(k) * std::log(static_cast<double>(k));
+  }
+  double operator()(std::uint64_t k) const {
+    if (k < kSize) return t_[k];
+    const double v = static_cast<double>(k);
+    return v * std::log(v);
+  }
+
+ private:
+  static constexpr std::size_t kSize = std::size_t(1) << 16;
+  std::vector<double> t_;
+};
+
+const XLogX& xlogx_table() {
+  static const XLogX t;
+  return t;
+}
+
+// One child histogram with what every pair needs precomputed: its total, its sum f ln f in bin
+// order, and a bit mask of its non-empty bins.
+struct Child {
+  std::uint32_t* h = nullptr;
+  std::uint64_t* nz = nullptr;
+  std::uint64_t n = 0;
+  double cells = 0;
+};
+
+// Per-thread scratch for the children of one block (reused for every block the thread handles).
+struct Scratch {
+  std::vector<std::uint32_t> hist;
+  std::vector<std::uint64_t> masks;
+  Child kids[8];
+};
+
 struct Divider {
   const Grid& grid;
   const TextureMap& tex;
   const Params& params;
+  const XLogX& xl;
+  std::size_t bins;
+  std::size_t words;  // 64-bit words of a bin mask
 
-  void histogram(const Block& b, std::vector<std::uint32_t>& h) const {
-    std::fill(h.begin(), h.end(), 0u);
+  void histogram(const Block& b, Child& c) const {
+    std::uint32_t* h = c.h;
+    std::fill(h, h + bins, 0u);
     const std::size_t nx = grid.dims.nx, ny = grid.dims.ny;
     for (std::uint32_t z = b.lo[2]; z < b.hi[2]; ++z)
       for (std::uint32_t y = b.lo[1]; y < b.hi[1]; ++y) {
@@ -39,12 +84,55 @@ struct Divider {
         for (std::uint32_t x = b.lo[0]; x < b.hi[0]; ++x)
           if (row[x] != kNoTexture) ++h[row[x]];
       }
+    c.n = 0;
+    c.cells = 0;
+    for (std::size_t w = 0; w < words; ++w) {
+      std::uint64_t m = 0;
+      for (std::size_t k = 0; k < 64; ++k) m |= static_cast<std::uint64_t>(h[w * 64 + k] != 0) << k;
+      c.nz[w] = m;
+      for (std::uint64_t u = m; u; u &= u - 1) {
+        const std::uint32_t f = h[w * 64 + static_cast<std::size_t>(__builtin_ctzll(u))];
+        c.n += f;
+        c.cells += xl(f);
+      }
+    }
+  }
+
+  // g_statistic(a.h, b.h, bins), bit for bit: the same terms in the same order, with the
+  // per-histogram sums taken from the children and the joint term summed over the union of
+  // their non-empty bins (the skipped terms are exact zeros).
+  double g(const Child& a, const Child& b) const {
+    double joint = 0;
+    for (std::size_t w = 0; w < words; ++w)
+      for (std::uint64_t u = a.nz[w] | b.nz[w]; u; u &= u - 1) {
+        const std::size_t i = w * 64 + static_cast<std::size_t>(__builtin_ctzll(u));
+        joint += xl(std::uint64_t(a.h[i]) + b.h[i]);
+      }
+    const double ns = static_cast<double>(a.n), nm = static_cast<double>(b.n);
+    const double cells = a.cells + b.cells;
+    const double g = 2.0 * (cells - xl(a.n) - xl(b.n) - joint + xl(a.n + b.n));
+    return g > 1e-9 * (ns + nm) ? g : 0.0;
+  }
+
+  // should_split() over the non-empty children.
+  bool split(const Child* const* used, std::size_t n) const {
+    if (n < 2) return false;
+    double gmax = 0, gmin = std::numeric_limits<double>::infinity();
+    for (std::size_t a = 0; a < n; ++a)
+      for (std::size_t b = a + 1; b < n; ++b) {
+        const double v = g(*used[a], *used[b]);
+        gmax = std::max(gmax, v);
+        gmin = std::min(gmin, v);
+      }
+    if (gmax == 0) return false;
+    if (gmin == 0) return true;
+    return gmax / gmin > params.split_ratio;
   }
 
   // Octants of a block of nominal edge `size` whose low corner is a multiple of `size`.
-  static std::vector<Block> octants(const Block& b, std::uint32_t size) {
+  static int octants(const Block& b, std::uint32_t size, Block* out) {
     const std::uint32_t half = size / 2;
-    std::vector<Block> out;
+    int n = 0;
     for (int k = 0; k < 8; ++k) {
       Block c;
       bool empty = false;
@@ -55,35 +143,33 @@ struct Divider {
         c.hi[a] = upper ? b.hi[a] : std::min(mid, b.hi[a]);
         if (c.lo[a] >= c.hi[a]) empty = true;
       }
-      if (!empty) out.push_back(c);
+      if (!empty) out[n++] = c;
     }
-    return out;
+    return n;
   }
 
-  void run(const Block& b, std::uint32_t size, std::vector<Block>& leaves) const {
+  void run(const Block& b, std::uint32_t size, std::vector<Block>& leaves, Scratch& s) const {
     if (size <= static_cast<std::uint32_t>(params.smin)) {
       leaves.push_back(b);
       return;
     }
-    const std::vector<Block> kids = octants(b, size);
-    if (kids.size() == 1) {  // the map edge left a single octant: nothing to compare yet
-      run(kids[0], size / 2, leaves);
+    Block kids[8];
+    const int nk = octants(b, size, kids);
+    if (nk == 1) {  // the map edge left a single octant: nothing to compare yet
+      run(kids[0], size / 2, leaves, s);
       return;
     }
-    const std::size_t bins = static_cast<std::size_t>(tex.code_count());
-    std::vector<std::vector<std::uint32_t>> hist(kids.size(), std::vector<std::uint32_t>(bins));
-    std::vector<const std::uint32_t*> used;
-    for (std::size_t k = 0; k < kids.size(); ++k) {
-      histogram(kids[k], hist[k]);
-      bool any = false;
-      for (auto v : hist[k]) any = any || v;
-      if (any) used.push_back(hist[k].data());  // octants of border voxels only carry no texture
+    const Child* used[8];
+    std::size_t nu = 0;
+    for (int k = 0; k < nk; ++k) {
+      histogram(kids[k], s.kids[k]);
+      if (s.kids[k].n) used[nu++] = &s.kids[k];  // octants of border voxels only carry no texture
     }
-    if (!should_split(used, bins, params.split_ratio)) {
+    if (!split(used, nu)) {
       leaves.push_back(b);
       return;
     }
-    for (const Block& k : kids) run(k, size / 2, leaves);
+    for (int k = 0; k < nk; ++k) run(kids[k], size / 2, leaves, s);  // scratch is free again here
   }
 };
 
@@ -96,16 +182,26 @@ std::vector<Block> divide(const Grid& grid, const TextureMap& tex, const Params&
   for (int a = 0; a < 3; ++a) t[a] = (n[a] + s - 1) / s;
   const std::size_t tops = t[0] * t[1] * t[2];
   std::vector<std::vector<Block>> per_top(tops);
-  const Divider d{grid, tex, params};
-  parallel_for(tops, params.threads, [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) {
+  const std::size_t bins = static_cast<std::size_t>(tex.code_count());
+  const Divider d{grid, tex, params, xlogx_table(), bins, (bins + 63) / 64};
+  // Finer chunks than threads: top blocks differ a lot in cost (uniform ones never split).
+  const std::size_t chunks = std::min<std::size_t>(tops, 64);
+  parallel_for(chunks, params.threads, [&](std::size_t c0, std::size_t c1) {
+    Scratch sc;
+    sc.hist.assign(8 * d.words * 64, 0);
+    sc.masks.assign(8 * d.words, 0);
+    for (int k = 0; k < 8; ++k) {
+      sc.kids[k].h = sc.hist.data() + k * d.words * 64;
+      sc.kids[k].nz = sc.masks.data() + k * d.words;
+    }
+    for (std::size_t i = tops * c0 / chunks; i < tops * c1 / chunks; ++i) {
       const std::size_t c[3] = {i % t[0], (i / t[0]) % t[1], i / (t[0] * t[1])};
       Block blk;
       for (int a = 0; a < 3; ++a) {
         blk.lo[a] = static_cast<std::uint32_t>(c[a] * s);
         blk.hi[a] = static_cast<std::uint32_t>(std::min<std::size_t>(n[a], (c[a] + 1) * s));
       }
-      d.run(blk, s, per_top[i]);
+      d.run(blk, s, per_top[i], sc);
     }
   });
   std::vector<Block> leaves;

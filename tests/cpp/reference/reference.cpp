@@ -221,16 +221,17 @@ TextureMap texture(const Grid& grid, int bins) {
 }
 
 double g_statistic(const std::uint32_t* s, const std::uint32_t* m, std::size_t bins) {
-  double cells = 0, joint = 0, ns = 0, nm = 0;
+  // The documented summation: sum f ln f of each histogram in bin order, then added.
+  double cs = 0, cm = 0, joint = 0, ns = 0, nm = 0;
   for (std::size_t i = 0; i < bins; ++i) {
     const double a = s[i], b = m[i];
-    if (a == 0 && b == 0) continue;
-    cells += xlogx(a) + xlogx(b);
+    cs += xlogx(a);
+    cm += xlogx(b);
     joint += xlogx(a + b);
     ns += a;
     nm += b;
   }
-  const double g = 2.0 * (cells - xlogx(ns) - xlogx(nm) - joint + xlogx(ns + nm));
+  const double g = 2.0 * ((cs + cm) - xlogx(ns) - xlogx(nm) - joint + xlogx(ns + nm));
   return g > 1e-9 * (ns + nm) ? g : 0.0;
 }
 
