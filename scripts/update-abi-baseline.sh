@@ -9,5 +9,5 @@ build=${1:-build}
 cmake --build "$build" -j2 --target occseg
 abidw --no-corpus-path --no-comp-dir-path --no-show-locs --exported-interfaces-only --drop-private-types \
       --type-id-style hash --headers-dir capi/include --headers-dir "$build/capi/include" \
-      "$build/capi/liboccseg.so" > capi/abi/liboccseg.abi
+      "$build/capi/liboccseg.so" | sed "s|path='$PWD/|path='|" > capi/abi/liboccseg.abi  # no host paths
 echo "wrote capi/abi/liboccseg.abi ($(grep -c '<elf-symbol ' capi/abi/liboccseg.abi) functions)"
