@@ -12,5 +12,7 @@ enum Exit { kOk = 0, kUsage = 1, kBadInput = 2, kInternal = 3 };
 using Runner = std::function<int()>;
 
 Runner add_segment(CLI::App& app);
+Runner add_simulate(CLI::App& app);
+Runner add_evaluate(CLI::App& app);
 
 }  // namespace occseg::cli

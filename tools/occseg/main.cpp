@@ -27,6 +27,8 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("occseg ") + OCCSEG_VERSION_TEXT);
   app.require_subcommand(1);
   std::vector<Runner> runners{add_segment(app)};
+  runners.push_back(add_simulate(app));
+  runners.push_back(add_evaluate(app));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
