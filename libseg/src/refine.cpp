@@ -1,7 +1,7 @@
 #include "occseg/refine.hpp"
 
 #include <algorithm>
-#include <memory>
+#include <cmath>
 
 #include "occseg/parallel.hpp"
 
@@ -14,39 +14,236 @@ namespace {
 constexpr std::uint8_t kFree = static_cast<std::uint8_t>(State::free);
 constexpr std::uint8_t kUnknown = static_cast<std::uint8_t>(State::unknown);
 constexpr std::uint8_t kOccupied = static_cast<std::uint8_t>(State::occupied);
+constexpr int kMaxLook = 64;  // params.lookahead's upper bound
 
-// Runs fn(first, stride, length) over every line of the map along `dir`; `first` is the index
-// where the scan starts and `stride` the signed step between successive voxels.
-template <class F>
-void for_each_line(const Grid& g, ScanDirection dir, int threads, F&& fn) {
-  const std::size_t n[3] = {g.dims.nx, g.dims.ny, g.dims.nz};
-  const std::ptrdiff_t s[3] = {1, static_cast<std::ptrdiff_t>(n[0]), static_cast<std::ptrdiff_t>(n[0] * n[1])};
-  const int a = dir.axis, b = (a + 1) % 3, c = (a + 2) % 3;
-  const std::size_t len = n[a];
-  const std::ptrdiff_t stride = s[a] * dir.step;
-  parallel_for(n[c], threads, [&](std::size_t c0, std::size_t c1) {
-    for (std::size_t ic = c0; ic < c1; ++ic)
-      for (std::size_t ib = 0; ib < n[b]; ++ib) {
-        std::ptrdiff_t first = static_cast<std::ptrdiff_t>(ib) * s[b] + static_cast<std::ptrdiff_t>(ic) * s[c];
-        if (dir.step < 0) first += static_cast<std::ptrdiff_t>(len - 1) * s[a];
-        fn(first, stride, len);
+// Float thresholds equivalent to the double ones: for every float p,
+// double(p) < below  <=>  p < lo   and   double(p) > above  <=>  p > hi.
+void float_bounds(double below, double above, float& lo, float& hi) {
+  lo = static_cast<float>(below);
+  if (static_cast<double>(lo) < below) lo = std::nextafter(lo, 2.0f);
+  while (static_cast<double>(std::nextafter(lo, -1.0f)) >= below) lo = std::nextafter(lo, -1.0f);
+  hi = static_cast<float>(above);
+  if (static_cast<double>(hi) > above) hi = std::nextafter(hi, -1.0f);
+  while (static_cast<double>(std::nextafter(hi, 2.0f)) <= above) hi = std::nextafter(hi, 2.0f);
+}
+
+__attribute__((target_clones("avx2", "default")))
+void own_row(const float* p, std::size_t n, float lo, float hi, std::uint8_t* out) {
+  for (std::size_t i = 0; i < n; ++i)
+    out[i] = static_cast<std::uint8_t>(p[i] < lo ? kFree : (p[i] > hi ? kOccupied : kUnknown));
+}
+
+// The four cases on own states (own[k] == kFree: p below the band, kOccupied: above it).
+void classify_own(const std::uint8_t* const* own, int n, std::uint8_t from, bool* reassign) {
+  bool low = false, high = false;
+  for (int k = 0; k < n; ++k) {
+    low = low || *own[k] == kFree;
+    high = high || *own[k] == kOccupied;
+    reassign[k] = false;
+  }
+  const bool other = (from == kFree) ? low : high;
+  const bool own_side = (from == kFree) ? high : low;
+  if (!other) return;  // cases i and ii
+  for (int k = 0; k < n; ++k)
+    reassign[k] = !own_side || ((from == kFree) ? *own[k] != kOccupied : *own[k] != kFree);  // iii / iv
+}
+
+inline bool is_boundary(std::uint8_t a, std::uint8_t s) {
+  return (a == kFree && s == kOccupied) || (a == kOccupied && s == kFree);
+}
+
+// ---- scans along x: one row at a time, rows without any candidate skipped by a vector test ----
+
+void unknown_row(std::uint8_t* st, const std::uint8_t* own, std::size_t len, int step) {
+  if (len < 2) return;
+  // A row changes only if some free voxel at 0.5 follows an unknown one in scan order.
+  bool any = false;
+  if (step > 0) {
+    for (std::size_t k = 1; k < len; ++k) any |= (st[k - 1] == kUnknown) & (st[k] == kFree) & (own[k] == kUnknown);
+  } else {
+    for (std::size_t k = 0; k + 1 < len; ++k) any |= (st[k + 1] == kUnknown) & (st[k] == kFree) & (own[k] == kUnknown);
+  }
+  if (!any) return;
+  if (step > 0) {
+    for (std::size_t k = 1; k < len; ++k)
+      if (st[k - 1] == kUnknown && st[k] == kFree && own[k] == kUnknown) st[k] = kUnknown;
+  } else {
+    for (std::size_t k = len - 1; k-- > 0;)
+      if (st[k + 1] == kUnknown && st[k] == kFree && own[k] == kUnknown) st[k] = kUnknown;
+  }
+}
+
+void boundary_row(std::uint8_t* st, const std::uint8_t* own, std::size_t len, int step, int look) {
+  if (len < 2) return;
+  bool any = false;  // windows only ever start at a free/occupied boundary
+  for (std::size_t k = 1; k < len; ++k) {
+    const unsigned a = st[k - 1], s = st[k];
+    any |= (a ^ s) == (kFree ^ kOccupied);
+  }
+  if (!any) return;
+  const std::ptrdiff_t stride = step;
+  std::uint8_t* first = step > 0 ? st : st + len - 1;
+  const std::uint8_t* ofirst = step > 0 ? own : own + len - 1;
+  const std::uint8_t* win[kMaxLook];
+  bool re[kMaxLook];
+  std::size_t k = 1;
+  while (k < len) {
+    std::uint8_t* c = first + static_cast<std::ptrdiff_t>(k) * stride;
+    const std::uint8_t a = c[-stride], s = c[0];
+    if (!is_boundary(a, s)) {
+      ++k;
+      continue;
+    }
+    int n = 0;
+    while (n < look && k + n < len && c[n * stride] == s) {
+      win[n] = ofirst + static_cast<std::ptrdiff_t>(k + n) * stride;
+      ++n;
+    }
+    classify_own(win, n, a, re);
+    for (int w = 0; w < n; ++w)
+      if (re[w]) c[w * stride] = a;
+    k += static_cast<std::size_t>(n);  // resume after the window: no cascade through it
+  }
+}
+
+// ---- scans along y and z: the lines of one plane advance together, row by row, so every
+// access is a contiguous row of nx voxels; each line keeps its own state (its skip count). ----
+
+struct Plane {
+  std::size_t rows;    // length of the lines (ny or nz)
+  std::ptrdiff_t row;  // distance between successive rows of the plane
+};
+
+// Which planes a scan along `axis` (1 or 2) has, and where plane `o` starts.
+inline std::size_t plane_count(const Dims& d, int axis) { return axis == 1 ? d.nz : d.ny; }
+inline std::size_t plane_base(const Dims& d, int axis, std::size_t o) { return axis == 1 ? d.nx * d.ny * o : d.nx * o; }
+inline Plane plane_shape(const Dims& d, int axis) {
+  return axis == 1 ? Plane{d.ny, static_cast<std::ptrdiff_t>(d.nx)} : Plane{d.nz, static_cast<std::ptrdiff_t>(d.nx * d.ny)};
+}
+
+__attribute__((target_clones("avx2", "default")))
+void unknown_step_rows(const std::uint8_t* prev, std::uint8_t* cur, const std::uint8_t* own, std::size_t n) {
+  for (std::size_t x = 0; x < n; ++x)
+    cur[x] = (prev[x] == kUnknown && cur[x] == kFree && own[x] == kUnknown) ? kUnknown : cur[x];
+}
+
+void unknown_plane(std::uint8_t* st, const std::uint8_t* own, std::size_t nx, Plane pl, int step) {
+  for (std::size_t k = 1; k < pl.rows; ++k) {
+    const std::size_t r = step > 0 ? k : pl.rows - 1 - k;
+    const std::size_t q = step > 0 ? k - 1 : pl.rows - k;
+    unknown_step_rows(st + static_cast<std::ptrdiff_t>(q) * pl.row, st + static_cast<std::ptrdiff_t>(r) * pl.row,
+                      own + static_cast<std::ptrdiff_t>(r) * pl.row, nx);
+  }
+}
+
+// True when some lane with no window in progress sees a free/occupied boundary; otherwise counts
+// the running windows down.
+__attribute__((target_clones("avx2", "default")))
+bool boundary_lanes(const std::uint8_t* prev, const std::uint8_t* cur, std::uint8_t* skip, std::size_t n) {
+  unsigned any = 0;
+  for (std::size_t x = 0; x < n; ++x) {
+    const unsigned a = prev[x], s = cur[x];
+    any |= ((a ^ s) == (kFree ^ kOccupied)) & (skip[x] == 0);
+  }
+  if (any) return true;
+  for (std::size_t x = 0; x < n; ++x) skip[x] = static_cast<std::uint8_t>(skip[x] - (skip[x] != 0));
+  return false;
+}
+
+void boundary_plane(std::uint8_t* st, const std::uint8_t* own, std::size_t nx, Plane pl, int step, int look,
+                    std::uint8_t* skip) {
+  std::fill(skip, skip + nx, 0);
+  const std::ptrdiff_t rs = pl.row * step;  // signed distance from one row to the next in scan order
+  std::uint8_t* first = step > 0 ? st : st + static_cast<std::ptrdiff_t>(pl.rows - 1) * pl.row;
+  const std::uint8_t* ofirst = step > 0 ? own : own + static_cast<std::ptrdiff_t>(pl.rows - 1) * pl.row;
+  const std::uint8_t* win[kMaxLook];
+  bool re[kMaxLook];
+  for (std::size_t k = 1; k < pl.rows; ++k) {
+    std::uint8_t* cur = first + static_cast<std::ptrdiff_t>(k) * rs;
+    const std::uint8_t* prev = cur - rs;
+    if (!boundary_lanes(prev, cur, skip, nx)) continue;
+    for (std::size_t x = 0; x < nx; ++x) {
+      if (skip[x]) {
+        --skip[x];
+        continue;
       }
+      const std::uint8_t a = prev[x], s = cur[x];
+      if (!is_boundary(a, s)) continue;
+      int n = 0;
+      while (n < look && k + n < pl.rows && cur[x + n * rs] == s) {
+        win[n] = ofirst + static_cast<std::ptrdiff_t>(k + n) * rs + static_cast<std::ptrdiff_t>(x);
+        ++n;
+      }
+      classify_own(win, n, a, re);
+      for (int w = 0; w < n; ++w)
+        if (re[w]) cur[x + w * rs] = a;
+      skip[x] = static_cast<std::uint8_t>(n - 1);  // resume after the window
+    }
+  }
+}
+
+// Runs one scan direction over the whole map, in parallel over independent lines.
+template <class RowFn, class PlaneFn>
+void scan(const Dims& d, ScanDirection dir, int threads, RowFn&& row_fn, PlaneFn&& plane_fn) {
+  if (dir.axis == 0) {
+    parallel_for(d.ny * d.nz, threads, [&](std::size_t r0, std::size_t r1) {
+      for (std::size_t r = r0; r < r1; ++r) row_fn(r * d.nx, d.nx);
+    });
+    return;
+  }
+  const Plane pl = plane_shape(d, dir.axis);
+  parallel_for(plane_count(d, dir.axis), threads, [&](std::size_t o0, std::size_t o1) {
+    std::vector<std::uint8_t> lane(d.nx);
+    for (std::size_t o = o0; o < o1; ++o) plane_fn(plane_base(d, dir.axis, o), pl, lane.data());
   });
 }
 
 }  // namespace
 
-void refine_unknown(std::vector<std::uint8_t>& st, const Grid& g, const Params& params) {
-  const float* p = g.p.data();
+std::vector<std::uint8_t> own_states(const Grid& g, const Params& params) {
+  std::vector<std::uint8_t> own(g.p.size());
+  float lo, hi;
+  float_bounds(params.free_below, params.occupied_above, lo, hi);
+  const std::size_t chunk = 1 << 16;
+  parallel_for((own.size() + chunk - 1) / chunk, params.threads, [&](std::size_t c0, std::size_t c1) {
+    const std::size_t b = c0 * chunk, e = std::min(own.size(), c1 * chunk);
+    own_row(g.p.data() + b, e - b, lo, hi, own.data() + b);
+  });
+  return own;
+}
+
+void refine_unknown(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
+                    const Params& params) {
   for (const ScanDirection dir : kSixDirections)
-    for_each_line(g, dir, params.threads, [&](std::ptrdiff_t i, std::ptrdiff_t stride, std::size_t len) {
-      std::uint8_t prev = st[i];
-      for (std::size_t k = 1; k < len; ++k) {
-        i += stride;
-        if (prev == kUnknown && st[i] == kFree && params.at_half(p[i])) st[i] = kUnknown;
-        prev = st[i];
-      }
-    });
+    scan(
+        d, dir, params.threads,
+        [&](std::size_t first, std::size_t len) { unknown_row(st.data() + first, own.data() + first, len, dir.step); },
+        [&](std::size_t base, Plane pl, std::uint8_t*) {
+          unknown_plane(st.data() + base, own.data() + base, d.nx, pl, dir.step);
+        });
+}
+
+void refine_boundaries(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
+                       const Params& params) {
+  const int look = std::clamp(params.lookahead, 1, kMaxLook);
+  for (int pass = 0; pass < params.refine_passes; ++pass)
+    for (const ScanDirection dir : kSixDirections)
+      scan(
+          d, dir, params.threads,
+          [&](std::size_t first, std::size_t len) {
+            boundary_row(st.data() + first, own.data() + first, len, dir.step, look);
+          },
+          [&](std::size_t base, Plane pl, std::uint8_t* lane) {
+            boundary_plane(st.data() + base, own.data() + base, d.nx, pl, dir.step, look, lane);
+          });
+}
+
+void refine_unknown(std::vector<std::uint8_t>& st, const Grid& g, const Params& params) {
+  refine_unknown(st, own_states(g, params), g.dims, params);
+}
+
+void refine_boundaries(std::vector<std::uint8_t>& st, const Grid& g, const Params& params) {
+  refine_boundaries(st, own_states(g, params), g.dims, params);
 }
 
 void classify_window(const float* p, int n, std::uint8_t from, std::uint8_t into,
@@ -69,38 +266,6 @@ void classify_window(const float* p, int n, std::uint8_t from, std::uint8_t into
     }
   }
   (void)into;
-}
-
-void refine_boundaries(std::vector<std::uint8_t>& st, const Grid& g, const Params& params) {
-  const int look = std::max(1, params.lookahead);
-  const float* pg = g.p.data();
-  for (int pass = 0; pass < params.refine_passes; ++pass)
-    for (const ScanDirection dir : kSixDirections)
-      for_each_line(g, dir, params.threads, [&](std::ptrdiff_t first, std::ptrdiff_t stride, std::size_t len) {
-        std::vector<float> win(static_cast<std::size_t>(look));
-        std::vector<std::ptrdiff_t> at(static_cast<std::size_t>(look));
-        std::unique_ptr<bool[]> re(new bool[static_cast<std::size_t>(look)]);
-        std::size_t k = 1;
-        while (k < len) {
-          const std::ptrdiff_t i = first + static_cast<std::ptrdiff_t>(k) * stride;
-          const std::uint8_t a = st[i - stride], s = st[i];
-          const bool boundary = (a == kFree && s == kOccupied) || (a == kOccupied && s == kFree);
-          if (!boundary) {
-            ++k;
-            continue;
-          }
-          int n = 0;  // the window: up to `look` voxels of the entered segment
-          while (n < look && k + n < len && st[i + n * stride] == s) {
-            at[n] = i + n * stride;
-            win[n] = pg[at[n]];
-            ++n;
-          }
-          classify_window(win.data(), n, a, s, params, re.get());
-          for (int w = 0; w < n; ++w)
-            if (re[w]) st[at[w]] = a;
-          k += static_cast<std::size_t>(n);  // resume after the window: no cascade through it
-        }
-      });
 }
 
 }  // namespace occseg

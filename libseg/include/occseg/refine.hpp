@@ -24,6 +24,17 @@ void refine_unknown(std::vector<std::uint8_t>& states, const Grid& grid, const P
 // reassigned by the paper's four cases.
 void refine_boundaries(std::vector<std::uint8_t>& states, const Grid& grid, const Params& params);
 
+// The state each voxel's own probability gives (values of occseg::State: params.state_of(p)).
+// Refinement and the default rules only ever look at probabilities through it.
+std::vector<std::uint8_t> own_states(const Grid& grid, const Params& params);
+
+// The same two steps with the own states already computed (own_states(grid, params)); the
+// pipeline computes them once for all stages.
+void refine_unknown(std::vector<std::uint8_t>& states, const std::vector<std::uint8_t>& own, const Dims& dims,
+                    const Params& params);
+void refine_boundaries(std::vector<std::uint8_t>& states, const std::vector<std::uint8_t>& own, const Dims& dims,
+                       const Params& params);
+
 // The four cases for one window of probabilities beyond a boundary: `into` is the state of the
 // segment entered (free or occupied), `from` the state before the boundary. Sets reassign[k]
 // for each voxel that moves to `from`. Exposed for unit tests.
