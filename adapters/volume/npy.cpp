@@ -1,5 +1,6 @@
 #include "occseg/npy.hpp"
 
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -169,6 +170,27 @@ Grid grid_from_npy(const NpyArray& a, double voxel_size, const std::string& name
 
 void write_grid_npy(const std::string& path, const Grid& g) {
   write_npy(path, "<f4", {g.dims.nz, g.dims.ny, g.dims.nx}, g.p.data(), g.p.size() * sizeof(float));
+}
+
+void write_grid_npy_as(const std::string& path, const Grid& g, const std::string& descr) {
+  const std::vector<std::size_t> shape{g.dims.nz, g.dims.ny, g.dims.nx};
+  const std::size_t n = g.p.size();
+  if (descr == "<f4") return write_grid_npy(path, g);
+  if (descr == "<f8") {
+    std::vector<double> v(g.p.begin(), g.p.end());
+    return write_npy(path, descr, shape, v.data(), n * sizeof(double));
+  }
+  if (descr == "|u1") {
+    std::vector<std::uint8_t> v(n);
+    for (std::size_t i = 0; i < n; ++i) v[i] = static_cast<std::uint8_t>(std::lround(double(g.p[i]) * 255.0));
+    return write_npy(path, descr, shape, v.data(), n);
+  }
+  if (descr == "<u2") {
+    std::vector<std::uint16_t> v(n);
+    for (std::size_t i = 0; i < n; ++i) v[i] = static_cast<std::uint16_t>(std::lround(double(g.p[i]) * 65535.0));
+    return write_npy(path, descr, shape, v.data(), n * sizeof(std::uint16_t));
+  }
+  throw Error(Status::invalid_argument, "cannot write a map as dtype '" + descr + "' (use <f4, <f8, |u1 or <u2)");
 }
 
 void write_labels_npy(const std::string& path, const Dims& d, const std::vector<std::uint32_t>& labels) {

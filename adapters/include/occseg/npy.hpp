@@ -34,6 +34,10 @@ Grid grid_from_npy(const NpyArray& a, double voxel_size, const std::string& name
 
 // Writes a map as float32 [z, y, x] and labels as uint32 [z, y, x].
 void write_grid_npy(const std::string& path, const Grid& g);
+// Writes a map as [z, y, x] in any dtype the C ABI takes: "<f4", "<f8", "|u1" or "<u2"; integer
+// dtypes store round(p * max), which grid_from_npy maps back to within 0.5 / max. Throws
+// Error(invalid_argument) for another dtype.
+void write_grid_npy_as(const std::string& path, const Grid& g, const std::string& descr);
 void write_labels_npy(const std::string& path, const Dims& d, const std::vector<std::uint32_t>& labels);
 
 }  // namespace occseg

@@ -1,0 +1,72 @@
+// Options and helpers shared by the readers that fuse range scans into a grid (PCL clouds,
+// OctoMap scan graphs). Free of PCL and OctoMap: only the core and header-only Eigen.
+//
+// Pose convention (as OctoMap's insertPointCloud(cloud, sensor_origin, frame_origin)): a scan's
+// points are given in the sensor frame; the pose maps them into the world frame, and the sensor
+// sits at pose.translation(). Points already in world coordinates with the sensor elsewhere go
+// straight to OccupancyFusion::insert_scan(sensor, xyz, count, stride).
+#pragma once
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <optional>
+
+#include "occseg/fusion.hpp"
+
+namespace occseg {
+
+// An axis-aligned box in world metres.
+struct Box {
+  Vec3 min{0, 0, 0};
+  Vec3 max{0, 0, 0};
+};
+
+struct ScanOptions {
+  double voxel_size = 0.05;     // metres per voxel edge
+  SensorModel model;            // log-odds model and max range (OctoMap's defaults)
+  std::optional<Box> bbox;      // grid box; empty: fitted to the points and the sensor origins
+  double margin = 0.0;          // metres added on every side of a fitted box
+  // Overrides the pose stored with the data (a cloud's sensor_origin_/sensor_orientation_,
+  // a scan graph node's pose); applied to every scan.
+  std::optional<Eigen::Isometry3f> sensor_pose;
+  int threads = 0;              // 0: all cores; results never depend on it
+  // Throws Error(invalid_argument / bad_value) naming the field when a value is out of range.
+  void validate() const;
+};
+
+// The grid frame over a given box: origin at box.min, ceil(extent / voxel_size) voxels per
+// axis (at least 1). Throws Error(bad_value) for an empty, inverted or non-finite box and
+// Error(bad_dims) when it needs too many voxels.
+GridFrame frame_for_box(const Box& box, double voxel_size);
+
+// Accumulates the bounding box of sensor origins and scan endpoints (in world coordinates),
+// for fitting a grid to the data before fusing it. Non-finite points are ignored; endpoints
+// beyond the max range count only up to the max range, since that is all the ray reaches.
+class ScanBounds {
+ public:
+  // Adds a scan of `count` points (x, y, z floats, `stride` floats apart) in the sensor frame.
+  void add(const Eigen::Isometry3f& pose, const float* xyz, std::size_t count, std::size_t stride,
+           double max_range);
+  bool empty() const { return !any_; }
+  // The smallest voxel-aligned frame holding everything added, padded by `margin` metres
+  // (fit_frame of the core). Throws Error(bad_value) if nothing finite was added.
+  GridFrame frame(double voxel_size, double margin) const;
+
+ private:
+  void extend(const Vec3& p);
+  bool any_ = false;
+  Vec3 lo_{0, 0, 0}, hi_{0, 0, 0};
+};
+
+// Inserts one scan given in the sensor frame: transforms the points by `pose` (without a copy
+// when the pose is the identity) and ray-casts from pose.translation().
+void insert_points(OccupancyFusion& fusion, const Eigen::Isometry3f& pose, const float* xyz,
+                   std::size_t count, std::size_t stride, int threads = 0);
+
+// True when the pose is exactly the identity (no transform needed).
+bool is_identity(const Eigen::Isometry3f& pose);
+
+// A pose from a translation and a unit quaternion (w, x, y, z); the quaternion is normalised.
+// Throws Error(bad_value) for a non-finite value or a zero quaternion.
+Eigen::Isometry3f make_pose(const Vec3& origin, const std::array<double, 4>& wxyz = {1, 0, 0, 0});
+
+}  // namespace occseg

@@ -1,0 +1,169 @@
+// .pcd files: reading through PCL's reader (every PCD encoding PCL knows), writing labelled
+// voxel clouds.
+#include <pcl/PCLPointCloud2.h>
+#include <pcl/conversions.h>
+#include <pcl/exceptions.h>
+#include <pcl/io/pcd_io.h>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "occseg/error.hpp"
+#include "occseg/file_write.hpp"
+#include "occseg/pcd.hpp"
+#include "occseg/pcl_cloud.hpp"
+
+namespace occseg {
+
+namespace {
+
+[[noreturn]] void bad_file(const std::string& path, const std::string& why) {
+  throw Error(Status::format, "'" + path + "' is not a valid .pcd file: " + why);
+}
+
+// PCL reads x, y, z by name; a file without them as single float32 fields would give zeros.
+void check_xyz_fields(const std::string& path, const pcl::PCLPointCloud2& blob) {
+  for (const char* name : {"x", "y", "z"}) {
+    bool found = false;
+    for (const pcl::PCLPointField& f : blob.fields) {
+      if (f.name != name) continue;
+      if (f.datatype != pcl::PCLPointField::FLOAT32 || f.count != 1)
+        bad_file(path, std::string("field '") + name + "' is not a single float32");
+      found = true;
+    }
+    if (!found) bad_file(path, std::string("it has no '") + name + "' field");
+  }
+  const std::size_t n = std::size_t(blob.width) * blob.height;
+  if (blob.data.size() < n * blob.point_step) bad_file(path, "data is shorter than WIDTH x HEIGHT points");
+}
+
+// PCL's reader trusts the header (a file without fields or sizes crashes it), so the header
+// is checked here first: consistent field lists, WIDTH x HEIGHT = POINTS, and enough bytes for
+// the binary encodings.
+void check_header(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(Status::io, "cannot open '" + path + "': " + std::strerror(errno));
+  std::size_t nfields = 0, nsize = 0, ntype = 0, ncount = 0, point_bytes = 0, width = 0, height = 1, points = 0;
+  std::vector<std::size_t> sizes, counts;
+  bool have_width = false, have_points = false;
+  std::string line, data;
+  for (int lines = 0; data.empty() && std::getline(in, line); ++lines) {
+    if (lines > 1000) bad_file(path, "no DATA line in the first 1000 lines");
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream ls(line);
+    std::string key, v;
+    if (!(ls >> key) || key[0] == '#') continue;
+    std::vector<std::string> vals;
+    while (ls >> v) vals.push_back(v);
+    auto number = [&](const std::string& t) -> std::size_t {
+      if (t.empty() || t.find_first_not_of("0123456789") != std::string::npos || t.size() > 12)
+        bad_file(path, key + " value '" + t + "' is not a count");
+      return std::stoull(t);
+    };
+    if (key == "FIELDS" || key == "COLUMNS") nfields = vals.size();
+    else if (key == "SIZE") {
+      nsize = vals.size();
+      for (const auto& t : vals) {
+        sizes.push_back(number(t));
+        if (sizes.back() != 1 && sizes.back() != 2 && sizes.back() != 4 && sizes.back() != 8)
+          bad_file(path, "field size " + t + " is not 1, 2, 4 or 8");
+      }
+    } else if (key == "TYPE") {
+      ntype = vals.size();
+      for (const auto& t : vals)
+        if (t != "I" && t != "U" && t != "F") bad_file(path, "field type '" + t + "' is not I, U or F");
+    } else if (key == "COUNT") {
+      ncount = vals.size();
+      for (const auto& t : vals) counts.push_back(number(t));
+    } else if (key == "WIDTH" && vals.size() == 1) width = number(vals[0]), have_width = true;
+    else if (key == "HEIGHT" && vals.size() == 1) height = number(vals[0]);
+    else if (key == "POINTS" && vals.size() == 1) points = number(vals[0]), have_points = true;
+    else if (key == "DATA" && vals.size() == 1) data = vals[0];
+  }
+  if (data.empty()) bad_file(path, "the header has no DATA line");
+  if (!nfields || nsize != nfields || ntype != nfields || (ncount && ncount != nfields))
+    bad_file(path, "FIELDS, SIZE, TYPE and COUNT do not list the same number of fields");
+  if (!have_width || !have_points || width * height != points)
+    bad_file(path, "WIDTH x HEIGHT does not equal POINTS");
+  for (std::size_t i = 0; i < nfields; ++i) point_bytes += sizes[i] * (ncount ? counts[i] : 1);
+  if (data == "ascii") return;
+  if (data != "binary" && data != "binary_compressed") bad_file(path, "DATA '" + data + "' is not ascii, binary or binary_compressed");
+  const std::streamoff body = static_cast<std::streamoff>(in.tellg());
+  in.seekg(0, std::ios::end);
+  const std::size_t left = static_cast<std::size_t>(static_cast<std::streamoff>(in.tellg()) - body);
+  if (data == "binary") {
+    if (left < points * point_bytes) bad_file(path, "truncated: " + std::to_string(points) + " points need " +
+                                                       std::to_string(points * point_bytes) + " bytes, the file has " +
+                                                       std::to_string(left));
+    return;
+  }
+  std::uint32_t sz[2] = {0, 0};  // compressed and uncompressed sizes
+  in.seekg(body);
+  if (left < 8 || !in.read(reinterpret_cast<char*>(sz), 8)) bad_file(path, "truncated compressed data");
+  if (sz[1] != points * point_bytes) bad_file(path, "compressed data does not hold POINTS points");
+  if (left - 8 < sz[0]) bad_file(path, "truncated: compressed data needs " + std::to_string(sz[0]) + " bytes, the file has " +
+                                           std::to_string(left - 8));
+}
+
+}  // namespace
+
+Grid read_pcd(const std::string& path, const ScanOptions& options) {
+  options.validate();
+  check_header(path);
+  pcl::PCLPointCloud2 blob;
+  Eigen::Vector4f origin = Eigen::Vector4f::Zero();
+  Eigen::Quaternionf orientation = Eigen::Quaternionf::Identity();
+  int version = 0;
+  int rc = 0;
+  try {
+    pcl::PCDReader reader;
+    rc = reader.read(path, blob, origin, orientation, version, 0);
+  } catch (const pcl::PCLException& e) {
+    bad_file(path, e.detailedMessage());
+  } catch (const std::bad_alloc&) {
+    bad_file(path, "header claims more data than memory holds");
+  }
+  if (rc < 0) bad_file(path, "PCL's reader failed (code " + std::to_string(rc) + "; see its message above)");
+  check_xyz_fields(path, blob);
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  pcl::fromPCLPointCloud2(blob, cloud);
+  blob = pcl::PCLPointCloud2();  // free the raw copy before allocating the grid
+  cloud.sensor_origin_ = origin;
+  cloud.sensor_orientation_ = orientation;
+  if (!origin.head<3>().allFinite() || !orientation.coeffs().allFinite() || orientation.norm() < 1e-6f)
+    bad_file(path, "VIEWPOINT is not a finite pose");
+  try {
+    return integrate_cloud(cloud, options);
+  } catch (const Error& e) {
+    throw Error(e.status(), "'" + path + "': " + e.what());
+  }
+}
+
+void write_segments_pcd(const std::string& path, const Grid& grid, const Result& result, StateSet states) {
+  const pcl::PointCloud<pcl::PointXYZL> cloud = labelled_cloud(grid, result, states);
+  // Written by hand rather than with pcl::PCDWriter: PCL refuses empty clouds, and this goes
+  // through write_file_atomically. Fields are packed (16 bytes a point), as DATA binary wants.
+  std::ostringstream h;
+  h << "# .PCD v0.7 - Point Cloud Data file format (occseg segments: label = segment id)\n"
+    << "VERSION 0.7\nFIELDS x y z label\nSIZE 4 4 4 4\nTYPE F F F U\nCOUNT 1 1 1 1\n"
+    << "WIDTH " << cloud.size() << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << cloud.size()
+    << "\nDATA binary\n";
+  const std::string header = h.str();
+  std::vector<char> body(cloud.size() * 16);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const pcl::PointXYZL& p = cloud[i];
+    std::memcpy(&body[16 * i], &p.x, 4);
+    std::memcpy(&body[16 * i + 4], &p.y, 4);
+    std::memcpy(&body[16 * i + 8], &p.z, 4);
+    std::memcpy(&body[16 * i + 12], &p.label, 4);
+  }
+  write_file_atomically(path, [&](std::ostream& out) {
+    out.write(header.data(), static_cast<std::streamsize>(header.size()));
+    out.write(body.data(), static_cast<std::streamsize>(body.size()));
+  });
+}
+
+}  // namespace occseg

@@ -1,0 +1,141 @@
+// NRRD read/write and the .npy writers for every C ABI dtype.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "occseg/error.hpp"
+#include "occseg/npy.hpp"
+#include "occseg/nrrd.hpp"
+
+using namespace occseg;
+namespace fs = std::filesystem;
+
+namespace {
+std::string tmp(const std::string& name) {
+  fs::create_directories(OCCSEG_TEST_TMP);
+  return std::string(OCCSEG_TEST_TMP) + "/" + name;
+}
+void put(const std::string& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary) << bytes;
+}
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+Status status_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.status();
+  }
+  return Status::ok;
+}
+Grid ramp() {
+  Grid g(Dims{4, 3, 2}, 0.5f, 0.25);
+  g.origin = {-1.0, 2.0, 0.5};
+  for (std::size_t i = 0; i < g.p.size(); ++i) g.p[i] = float(i) / 23.0f;
+  return g;
+}
+}  // namespace
+
+TEST(Nrrd, MapRoundTripKeepsValuesAndGeometry) {
+  const Grid g = ramp();
+  const std::string f = tmp("ramp.nrrd");
+  write_grid_nrrd(f, g);
+  const std::string text = slurp(f);
+  // The header as ParaView/Slicer read it: voxel centres, RAS space, exact short numbers.
+  EXPECT_NE(text.find("type: float\n"), std::string::npos);
+  EXPECT_NE(text.find("sizes: 4 3 2\n"), std::string::npos);
+  EXPECT_NE(text.find("space directions: (0.25,0,0) (0,0.25,0) (0,0,0.25)\n"), std::string::npos);
+  EXPECT_NE(text.find("space origin: (-0.875,2.125,0.625)\n"), std::string::npos) << "corner + half a voxel";
+  EXPECT_NE(text.find("space: right-anterior-superior\n"), std::string::npos);
+  const Grid back = grid_from_nrrd(read_nrrd(f), f);
+  EXPECT_TRUE(back.dims == g.dims);
+  EXPECT_DOUBLE_EQ(back.voxel_size, 0.25);
+  for (int k = 0; k < 3; ++k) EXPECT_DOUBLE_EQ(back.origin[k], g.origin[k]);
+  EXPECT_EQ(back.p, g.p);
+}
+
+TEST(Nrrd, LabelsAreUint32AndNotAMap) {
+  const Grid g = ramp();
+  std::vector<std::uint32_t> labels(g.p.size());
+  for (std::size_t i = 0; i < labels.size(); ++i) labels[i] = std::uint32_t(i * 1000003u);
+  const std::string f = tmp("labels.nrrd");
+  write_labels_nrrd(f, g, labels);
+  const NrrdVolume v = read_nrrd(f);
+  ASSERT_EQ(v.type, NrrdType::u32);
+  ASSERT_EQ(v.data.size(), labels.size() * 4);
+  EXPECT_EQ(std::memcmp(v.data.data(), labels.data(), v.data.size()), 0);
+  EXPECT_EQ(status_of([&] { grid_from_nrrd(v, f); }), Status::format);
+  EXPECT_EQ(status_of([&] { write_labels_nrrd(f, g, {1, 2}); }), Status::invalid_argument);
+}
+
+TEST(Nrrd, HandWrittenBigEndianAndAsciiFiles) {
+  // uint16, big endian, 2x1x1, spacings instead of space directions.
+  const std::string be = tmp("be.nrrd");
+  put(be, std::string("NRRD0004\ntype: ushort\ndimension: 3\nsizes: 2 1 1\nspacings: 0.5 0.5 0.5\nendian: big\n"
+                      "encoding: raw\n\n") + std::string("\xff\xff\x00\x00", 4));
+  const Grid g = grid_from_nrrd(read_nrrd(be), be);
+  EXPECT_FLOAT_EQ(g.p[0], 1.0f);
+  EXPECT_FLOAT_EQ(g.p[1], 0.0f);
+  EXPECT_DOUBLE_EQ(g.voxel_size, 0.5);
+  EXPECT_DOUBLE_EQ(g.origin[0], -0.25) << "no space origin: the first centre is at 0";
+  // ascii doubles, 2D, CRLF line ends, a comment and a key/value pair.
+  const std::string a = tmp("ascii.nrrd");
+  put(a, "NRRD0005\r\n# comment\r\ntype: double\r\ndimension: 2\r\nsizes: 3 1\r\nencoding: ascii\r\nkey:=value\r\n"
+         "space origin: (1,2)\r\n\r\n0.25 0.5\n0.75\n");
+  const Grid h = grid_from_nrrd(read_nrrd(a), a);
+  EXPECT_TRUE(h.dims == (Dims{3, 1, 1}));
+  EXPECT_FLOAT_EQ(h.p[2], 0.75f);
+  EXPECT_DOUBLE_EQ(h.origin[1], 1.5);
+}
+
+TEST(Nrrd, BadFilesGiveStatusesNamingTheFile) {
+  EXPECT_EQ(status_of([] { read_nrrd(tmp("missing.nrrd")); }), Status::io);
+  const std::string hdr = "NRRD0004\ntype: float\ndimension: 3\nsizes: 2 2 2\nendian: little\n";
+  const std::string f = tmp("bad.nrrd");
+  put(f, hdr + "encoding: raw\n\n" + std::string(31, '\0'));  // one byte short
+  try {
+    read_nrrd(f);
+    FAIL() << "truncated file accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.status(), Status::format);
+    EXPECT_NE(std::string(e.what()).find(f), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+  }
+  put(f, hdr + "encoding: gzip\n\n");
+  EXPECT_EQ(status_of([&] { read_nrrd(f); }), Status::unsupported);
+  put(f, hdr + "encoding: raw\nspace directions: (0,1,0) (1,0,0) (0,0,1)\n\n" + std::string(32, '\0'));
+  EXPECT_EQ(status_of([&] { read_nrrd(f); }), Status::unsupported) << "rotated axes";
+  put(f, hdr + "encoding: raw\n" + std::string(32, '\0'));
+  EXPECT_EQ(status_of([&] { read_nrrd(f); }), Status::format) << "no blank line";
+  put(f, "P6\n");
+  EXPECT_EQ(status_of([&] { read_nrrd(f); }), Status::format);
+  put(f, "NRRD0004\ntype: float\ndimension: 3\nsizes: 2 2 2\nspacings: 1 2 1\nendian: little\nencoding: raw\n\n" +
+             std::string(32, '\0'));
+  EXPECT_EQ(status_of([&] { grid_from_nrrd(read_nrrd(f), f); }), Status::format) << "anisotropic";
+  float two = 2.0f;
+  put(f, hdr + "encoding: raw\n\n" + std::string(reinterpret_cast<char*>(&two), 4) + std::string(28, '\0'));
+  EXPECT_EQ(status_of([&] { grid_from_nrrd(read_nrrd(f), f); }), Status::bad_value);
+}
+
+TEST(NpyWriters, EveryCAbiDtypeRoundTrips) {
+  const Grid g = ramp();
+  for (const char* d : {"<f4", "<f8", "|u1", "<u2"}) {
+    const std::string f = tmp(std::string("ramp_") + (d[1] == 'u' ? "u" : "f") + d[2] + ".npy");
+    write_grid_npy_as(f, g, d);
+    const NpyArray a = read_npy(f);
+    EXPECT_EQ(a.descr, d);
+    ASSERT_EQ(a.shape, (std::vector<std::size_t>{2, 3, 4}));
+    const Grid back = grid_from_npy(a, 1.0, f);
+    const double tol = d[1] == 'u' ? (d[2] == '1' ? 0.5 / 255 : 0.5 / 65535) + 1e-7 : 1e-7;
+    for (std::size_t i = 0; i < g.p.size(); ++i) EXPECT_NEAR(back.p[i], g.p[i], tol) << d << " " << i;
+  }
+  // Quantisation by hand: 0.5 * 255 = 127.5 rounds to 128.
+  Grid half(Dims{1, 1, 1}, 0.5f);
+  write_grid_npy_as(tmp("half.npy"), half, "|u1");
+  EXPECT_EQ(read_npy(tmp("half.npy")).data[0], 128);
+  EXPECT_EQ(status_of([&] { write_grid_npy_as(tmp("x.npy"), g, "<i8"); }), Status::invalid_argument);
+}

@@ -1,0 +1,135 @@
+#include "map_input.hpp"
+
+#include <algorithm>
+#include <cctype>
+
+#include "occseg/error.hpp"
+#include "occseg/npy.hpp"
+#include "occseg/nrrd.hpp"
+#ifdef OCCSEG_HAVE_PCL
+#include "occseg/pcd.hpp"
+#endif
+#ifdef OCCSEG_HAVE_OCTOMAP
+#include "occseg/octomap_file.hpp"
+#endif
+#if defined(OCCSEG_HAVE_PCL) || defined(OCCSEG_HAVE_OCTOMAP)
+#include "occseg/scan_options.hpp"
+#endif
+
+namespace occseg::cli {
+
+namespace {
+
+std::string extension(const std::string& path) {
+  const std::size_t dot = path.rfind('.'), slash = path.rfind('/');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
+  std::string e = path.substr(dot);
+  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return std::tolower(c); });
+  return e;
+}
+
+void reject(bool given, const char* option, const std::string& ext) {
+  if (given) throw Error(Status::invalid_argument, std::string(option) + " does not apply to " + ext + " input");
+}
+
+[[noreturn, maybe_unused]] void not_built(const std::string& ext, const char* lib) {
+  throw Error(Status::unsupported, ext + " input needs " + lib + ", which this build of occseg lacks");
+}
+
+#if defined(OCCSEG_HAVE_PCL) || defined(OCCSEG_HAVE_OCTOMAP)
+std::optional<Box> box_of(const MapInputOptions& o) {
+  if (!o.bbox) return std::nullopt;
+  const auto& b = *o.bbox;
+  return Box{{b[0], b[1], b[2]}, {b[3], b[4], b[5]}};
+}
+
+ScanOptions scan_options(const MapInputOptions& o) {
+  ScanOptions s;
+  s.voxel_size = o.voxel_size.value_or(0.05);
+  s.model.max_range = o.max_range;
+  s.bbox = box_of(o);
+  s.threads = o.threads;
+  if (o.sensor_origin || o.sensor_orientation)
+    s.sensor_pose = make_pose(o.sensor_origin.value_or(std::array<double, 3>{0, 0, 0}),
+                              o.sensor_orientation.value_or(std::array<double, 4>{1, 0, 0, 0}));
+  return s;
+}
+#endif
+
+}  // namespace
+
+bool have_pcl() {
+#ifdef OCCSEG_HAVE_PCL
+  return true;
+#else
+  return false;
+#endif
+}
+
+MapInput load_map(const std::string& path, const MapInputOptions& o) {
+  const std::string ext = extension(path);
+  MapInput in;
+  const bool scan_opts = o.sensor_origin || o.sensor_orientation || o.max_range >= 0;
+  if (ext == ".npy" || ext == ".nrrd") {
+    reject(o.bbox.has_value(), "--bbox", ext);
+    reject(scan_opts, "--sensor-origin/--sensor-orientation/--max-range", ext);
+    in.kind = InputKind::volume;
+    if (ext == ".npy") {
+      in.grid = grid_from_npy(read_npy(path), o.voxel_size.value_or(1.0), path);
+    } else {
+      in.grid = grid_from_nrrd(read_nrrd(path), path);
+      if (o.voxel_size) {  // the file's spacing, overridden; keep the first voxel centre in place
+        for (double& c : in.grid.origin) c += (in.grid.voxel_size - *o.voxel_size) / 2;
+        in.grid.voxel_size = *o.voxel_size;
+      }
+    }
+    return in;
+  }
+  if (ext == ".pcd" || ext == ".graph") {
+    in.kind = InputKind::cloud;
+    if (ext == ".pcd") {
+#ifdef OCCSEG_HAVE_PCL
+      in.grid = read_pcd(path, scan_options(o));
+#else
+      not_built(ext, "PCL (liboccseg_pcl)");
+#endif
+    } else {
+#ifdef OCCSEG_HAVE_OCTOMAP
+      in.grid = read_scan_graph(path, scan_options(o));
+#else
+      not_built(ext, "OctoMap (liboccseg_octomap)");
+#endif
+    }
+    return in;
+  }
+  if (ext == ".bt" || ext == ".ot") {
+    reject(scan_opts, "--sensor-origin/--sensor-orientation/--max-range", ext);
+    in.kind = InputKind::tree;
+#ifdef OCCSEG_HAVE_OCTOMAP
+    OctreeOptions t;
+    t.voxel_size = o.voxel_size.value_or(0.0);
+    t.bbox = box_of(o);
+    if (o.coarsen != "max" && o.coarsen != "mean")
+      throw Error(Status::invalid_argument, "--coarsen '" + o.coarsen + "' is not max or mean");
+    t.coarsen = o.coarsen == "mean" ? Coarsen::mean : Coarsen::max;
+    in.grid = read_octree_file(path, t);
+#else
+    not_built(ext, "OctoMap (liboccseg_octomap)");
+#endif
+    return in;
+  }
+  throw Error(Status::invalid_argument, "'" + path + "': unknown input type '" + ext +
+                                            "' (use .npy, .nrrd, .pcd, .graph, .bt or .ot)");
+}
+
+void write_cloud_output(const std::string& path, const Grid& grid, const Result& result) {
+#ifdef OCCSEG_HAVE_PCL
+  write_segments_pcd(path, grid, result, StateSet());
+#else
+  (void)grid;
+  (void)result;
+  not_built(path, "PCL (liboccseg_pcl)");
+#endif
+}
+
+}  // namespace occseg::cli

@@ -1,0 +1,41 @@
+// `occseg segment` input dispatch: picks the reader by file extension and says which outputs the
+// input kind gets. The only place the tool knows about PCL and OctoMap (through their PCL-free
+// adapter headers); a build without them reports Error(unsupported) for those extensions.
+#pragma once
+#include <array>
+#include <optional>
+#include <string>
+
+#include "occseg/grid.hpp"
+#include "occseg/segment.hpp"
+
+namespace occseg::cli {
+
+struct MapInputOptions {
+  std::optional<double> voxel_size;               // .npy: default 1; clouds: default 0.05 m; trees: resolution
+  std::optional<std::array<double, 6>> bbox;      // xmin ymin zmin xmax ymax zmax (metres)
+  std::optional<std::array<double, 3>> sensor_origin;       // clouds: overrides the stored viewpoint
+  std::optional<std::array<double, 4>> sensor_orientation;  // w x y z; with or without an origin
+  double max_range = -1;                          // clouds: metres, < 0 unlimited
+  std::string coarsen = "max";                    // trees at a coarser voxel size: max or mean
+  int threads = 0;
+};
+
+enum class InputKind { volume, cloud, tree };
+
+struct MapInput {
+  Grid grid;
+  InputKind kind = InputKind::volume;
+};
+
+// Reads .npy, .nrrd, .pcd, .graph, .bt or .ot (case-insensitive extension). Throws
+// Error(invalid_argument) for an unknown extension or an option the format cannot use,
+// Error(unsupported) for a format this build lacks, and the readers' errors otherwise.
+MapInput load_map(const std::string& path, const MapInputOptions& options);
+
+// Writes the voxel centres of occupied segments as a PointXYZL .pcd (label = segment id).
+// Throws Error(unsupported) in a build without PCL.
+void write_cloud_output(const std::string& path, const Grid& grid, const Result& result);
+bool have_pcl();
+
+}  // namespace occseg::cli
