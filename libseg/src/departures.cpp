@@ -3,87 +3,132 @@
 #include <algorithm>
 
 #include "occseg/parallel.hpp"
+#include "occseg/refine.hpp"
 
 namespace occseg {
 
 namespace {
 
-// In-place running min (erode) or max (dilate) of a 0/1 mask over a window of radius r along one
-// axis. Outside the map counts as `outside`.
-void box_pass(std::vector<std::uint8_t>& m, const Dims& d, int axis, int r, bool erode, int threads) {
-  const std::size_t n[3] = {d.nx, d.ny, d.nz};
-  const std::size_t s[3] = {1, d.nx, d.nx * d.ny};
-  const int b = (axis + 1) % 3, c = (axis + 2) % 3;
-  const std::size_t len = n[axis];
-  const std::uint8_t outside = erode ? 1 : 0;
-  parallel_for(n[c], threads, [&](std::size_t c0, std::size_t c1) {
-    std::vector<std::uint8_t> line(len);
-    std::vector<std::size_t> prefix(len + 1);
-    for (std::size_t ic = c0; ic < c1; ++ic)
-      for (std::size_t ib = 0; ib < n[b]; ++ib) {
-        const std::size_t first = ib * s[b] + ic * s[c];
-        prefix[0] = 0;
-        for (std::size_t k = 0; k < len; ++k) {
-          line[k] = m[first + k * s[axis]];
-          prefix[k + 1] = prefix[k] + line[k];
+constexpr std::uint8_t kFree = static_cast<std::uint8_t>(State::free);
+constexpr std::uint8_t kUnknown = static_cast<std::uint8_t>(State::unknown);
+constexpr std::uint8_t kOccupied = static_cast<std::uint8_t>(State::occupied);
+
+// out[x] = in[x] op in[x+d] for x in [0, n): one vectorisable step of a box filter.
+__attribute__((target_clones("avx2", "default")))
+void and_rows(std::uint8_t* out, const std::uint8_t* a, const std::uint8_t* b, std::size_t n) {
+  for (std::size_t x = 0; x < n; ++x) out[x] = a[x] & b[x];
+}
+__attribute__((target_clones("avx2", "default")))
+void or_rows(std::uint8_t* out, const std::uint8_t* a, const std::uint8_t* b, std::size_t n) {
+  for (std::size_t x = 0; x < n; ++x) out[x] = a[x] | b[x];
+}
+
+// One axis of a box erosion (AND) or dilation (OR) of radius r, from `in` to `out`. The window is
+// clipped by the map: erosion counts the outside as 1 and dilation as 0, as the opening needs.
+void box_pass(const std::uint8_t* in, std::uint8_t* out, const Dims& d, int axis, int r, bool erode, int threads) {
+  auto op = erode ? and_rows : or_rows;
+  const std::size_t nx = d.nx, ny = d.ny, nz = d.nz;
+  const std::size_t R = static_cast<std::size_t>(r);
+  if (axis == 0) {
+    parallel_for(ny * nz, threads, [&](std::size_t r0, std::size_t r1) {
+      for (std::size_t row = r0; row < r1; ++row) {
+        const std::uint8_t* a = in + row * nx;
+        std::uint8_t* o = out + row * nx;
+        std::copy(a, a + nx, o);
+        for (std::size_t k = 1; k <= R && k < nx; ++k) {
+          op(o, o, a + k, nx - k);  // o[x] op= a[x + k]
+          op(o + k, o + k, a, nx - k);  // o[x] op= a[x - k]
         }
-        for (std::size_t k = 0; k < len; ++k) {
-          const std::size_t lo = k >= static_cast<std::size_t>(r) ? k - r : 0;
-          const std::size_t hi = std::min(len, k + r + 1);
-          const std::size_t ones = prefix[hi] - prefix[lo];
-          const std::size_t missing = static_cast<std::size_t>(2 * r + 1) - (hi - lo);  // outside
-          std::uint8_t v;
-          if (erode) v = (ones == hi - lo && (outside || missing == 0)) ? 1 : 0;
-          else v = (ones > 0 || (outside && missing > 0)) ? 1 : 0;
-          m[first + k * s[axis]] = v;
-        }
+      }
+    });
+    return;
+  }
+  // y or z: whole rows combine with rows k voxels away along the axis.
+  const std::size_t len = axis == 1 ? ny : nz, planes = axis == 1 ? nz : ny;
+  const std::size_t row = axis == 1 ? nx : nx * ny;  // distance between rows along the axis
+  const std::size_t plane = axis == 1 ? nx * ny : nx;
+  parallel_for(planes, threads, [&](std::size_t p0, std::size_t p1) {
+    for (std::size_t pl = p0; pl < p1; ++pl)
+      for (std::size_t k = 0; k < len; ++k) {
+        const std::size_t base = pl * plane;
+        std::uint8_t* o = out + base + k * row;
+        const std::size_t lo = k >= R ? k - R : 0, hi = std::min(len - 1, k + R);
+        std::copy(in + base + lo * row, in + base + lo * row + nx, o);
+        for (std::size_t j = lo + 1; j <= hi; ++j) op(o, o, in + base + j * row, nx);
       }
   });
 }
 
+__attribute__((target_clones("avx2", "default")))
+void half_mask(const std::uint8_t* own, std::uint8_t* m, std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i) m[i] = own[i] == kUnknown;
+}
+
+// The per-voxel rules on one row of voxels (x in [0, n)); xm/xp, ym/yp, zm/zp are the own states
+// of the neighbours, with `none` (all free) rows standing in outside the map.
+__attribute__((target_clones("avx2", "default")))
+void rules_row(std::uint8_t* st, const std::uint8_t* own, const std::uint8_t* region, const std::uint8_t* ym,
+               const std::uint8_t* yp, const std::uint8_t* zm, const std::uint8_t* zp, std::size_t n) {
+  for (std::size_t x = 0; x < n; ++x) {
+    const std::uint8_t o = own[x];
+    const bool touches = (x > 0 && own[x - 1] == kOccupied) | (x + 1 < n && own[x + 1] == kOccupied) |
+                         (ym[x] == kOccupied) | (yp[x] == kOccupied) | (zm[x] == kOccupied) | (zp[x] == kOccupied);
+    const std::uint8_t s = st[x];
+    const std::uint8_t gap = (s == kFree && touches) ? kUnknown : s;
+    st[x] = o != kUnknown ? o : (region[x] ? kUnknown : gap);
+  }
+}
+
 }  // namespace
 
-std::vector<std::uint8_t> unknown_regions(const Grid& g, const Params& params) {
-  std::vector<std::uint8_t> m(g.dims.count());
-  for (std::size_t i = 0; i < m.size(); ++i) m[i] = params.at_half(g.p[i]) ? 1 : 0;
+std::vector<std::uint8_t> unknown_regions(const std::vector<std::uint8_t>& own, const Dims& d, const Params& params) {
+  std::vector<std::uint8_t> m(own.size());
+  const std::size_t chunk = 1 << 16;
+  parallel_for((m.size() + chunk - 1) / chunk, params.threads, [&](std::size_t c0, std::size_t c1) {
+    const std::size_t b = c0 * chunk, e = std::min(m.size(), c1 * chunk);
+    half_mask(own.data() + b, m.data() + b, e - b);
+  });
   const int r = params.gap_radius;
   if (r <= 0) return m;
-  for (int a = 0; a < 3; ++a) box_pass(m, g.dims, a, r, true, params.threads);
-  for (int a = 0; a < 3; ++a) box_pass(m, g.dims, a, r, false, params.threads);
-  // Opening can only shrink the mask, but guard against dilation leaking onto non-0.5 voxels.
-  for (std::size_t i = 0; i < m.size(); ++i) m[i] = m[i] && params.at_half(g.p[i]);
+  // Opening = erosion then dilation, each separable into three axis passes (ping-pong buffers).
+  std::vector<std::uint8_t> t(m.size());
+  std::uint8_t* a = m.data();
+  std::uint8_t* b = t.data();
+  for (int pass = 0; pass < 6; ++pass) {
+    box_pass(a, b, d, pass % 3, r, pass < 3, params.threads);
+    std::swap(a, b);
+  }
+  // Six passes end in m again. The opening only shrinks the mask; keep it on 0.5 voxels anyway.
+  parallel_for((m.size() + chunk - 1) / chunk, params.threads, [&](std::size_t c0, std::size_t c1) {
+    for (std::size_t i = c0 * chunk, e = std::min(m.size(), c1 * chunk); i < e; ++i)
+      m[i] = m[i] & (own[i] == kUnknown);
+  });
   return m;
 }
 
-void apply_voxel_rules(std::vector<std::uint8_t>& st, const Grid& g, const Params& params) {
-  const std::vector<std::uint8_t> region = unknown_regions(g, params);
-  const auto kFree = static_cast<std::uint8_t>(State::free);
-  const auto kUnknown = static_cast<std::uint8_t>(State::unknown);
-  const auto kOcc = static_cast<std::uint8_t>(State::occupied);
-  const std::size_t nx = g.dims.nx, ny = g.dims.ny, nz = g.dims.nz, sz = nx * ny;
-  const float* p = g.p.data();
-  // Reads st only at 0.5 voxels' neighbours whose own state is occupied: these never change, so
-  // the in-place update does not depend on visiting order.
+void apply_voxel_rules(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
+                       const Params& params) {
+  const std::vector<std::uint8_t> region = unknown_regions(own, d, params);
+  const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, sz = nx * ny;
+  const std::vector<std::uint8_t> none(nx, kFree);  // outside the map: no occupied neighbour
+  // Reads only own states and each voxel's own entry of st, so rows are independent.
   parallel_for(nz, params.threads, [&](std::size_t z0, std::size_t z1) {
     for (std::size_t z = z0; z < z1; ++z)
-      for (std::size_t y = 0; y < ny; ++y)
-        for (std::size_t x = 0; x < nx; ++x) {
-          const std::size_t i = x + nx * (y + ny * z);
-          const State own = params.state_of(p[i]);
-          if (own != State::unknown) {
-            st[i] = static_cast<std::uint8_t>(own);
-          } else if (region[i]) {
-            st[i] = kUnknown;
-          } else if (st[i] == kFree) {
-            const bool touches =
-                (x > 0 && p[i - 1] > params.occupied_above) || (x + 1 < nx && p[i + 1] > params.occupied_above) ||
-                (y > 0 && p[i - nx] > params.occupied_above) || (y + 1 < ny && p[i + nx] > params.occupied_above) ||
-                (z > 0 && p[i - sz] > params.occupied_above) || (z + 1 < nz && p[i + sz] > params.occupied_above);
-            if (touches) st[i] = kUnknown;
-          }
-        }
+      for (std::size_t y = 0; y < ny; ++y) {
+        const std::size_t i = nx * (y + ny * z);
+        const std::uint8_t* o = own.data() + i;
+        rules_row(st.data() + i, o, region.data() + i, y > 0 ? o - nx : none.data(), y + 1 < ny ? o + nx : none.data(),
+                  z > 0 ? o - sz : none.data(), z + 1 < nz ? o + sz : none.data(), nx);
+      }
   });
-  (void)kOcc;
+}
+
+std::vector<std::uint8_t> unknown_regions(const Grid& g, const Params& params) {
+  return unknown_regions(own_states(g, params), g.dims, params);
+}
+
+void apply_voxel_rules(std::vector<std::uint8_t>& st, const Grid& g, const Params& params) {
+  apply_voxel_rules(st, own_states(g, params), g.dims, params);
 }
 
 }  // namespace occseg

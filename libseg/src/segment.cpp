@@ -66,8 +66,8 @@ Result segment(const Grid& grid, const Params& params, bool keep_stages) {
     const std::vector<std::uint8_t> own = own_states(grid, params);
     refine_unknown(states, own, grid.dims, params);
     refine_boundaries(states, own, grid.dims, params);
+    if (params.preset == Preset::default_preset) apply_voxel_rules(states, own, grid.dims, params);
   }
-  if (params.preset == Preset::default_preset) apply_voxel_rules(states, grid, params);
   st.begin("labelling");
   label_components(states, grid, r.labels, r.segments);
   st.end();

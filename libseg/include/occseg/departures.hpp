@@ -24,4 +24,9 @@ std::vector<std::uint8_t> unknown_regions(const Grid& grid, const Params& params
 //    shell is not a way through).
 void apply_voxel_rules(std::vector<std::uint8_t>& states, const Grid& grid, const Params& params);
 
+// The same two with the voxels' own states (own_states() of refine.hpp) already computed.
+std::vector<std::uint8_t> unknown_regions(const std::vector<std::uint8_t>& own, const Dims& dims, const Params& params);
+void apply_voxel_rules(std::vector<std::uint8_t>& states, const std::vector<std::uint8_t>& own, const Dims& dims,
+                       const Params& params);
+
 }  // namespace occseg
