@@ -1,0 +1,53 @@
+"""Parameter sets (occseg_params) built from Python keywords, and the parameter table."""
+import ctypes
+import dataclasses
+import numbers
+
+from ._errors import OccsegError, Status, check
+from ._lib import lib
+
+
+@dataclasses.dataclass(frozen=True)
+class ParamInfo:
+    """One row of the library's parameter table."""
+
+    name: str
+    kind: str  # "int", "double" or "string"
+    description: str
+    min: float  # inclusive bounds (0, 0 for "string" parameters)
+    max: float
+
+
+def param_table():
+    """Every parameter the loaded library (and its plugins) accepts, in table order."""
+    rows = []
+    for i in range(lib.occseg_param_count()):
+        lo, hi = ctypes.c_double(), ctypes.c_double()
+        check(lib.occseg_param_bounds(i, ctypes.byref(lo), ctypes.byref(hi)))
+        rows.append(ParamInfo(lib.occseg_param_name(i).decode(), lib.occseg_param_kind(i).decode(),
+                              lib.occseg_param_description(i).decode(), lo.value, hi.value))
+    return rows
+
+
+def set_param(handle, name, value):
+    """Sets one parameter: ints and floats (Python or NumPy) through the typed setters, text as
+    occseg_params_set parses it. Anything else (bool, bytes, None, ...) is refused, not guessed."""
+    key = name.encode()
+    if isinstance(value, bool) or not isinstance(value, (numbers.Real, str)):
+        raise OccsegError(Status.EINVAL, f"occseg.segment: parameter '{name}': {value!r} "
+                                         f"({type(value).__name__}) is not a number or text")
+    if isinstance(value, str) or isinstance(value, numbers.Integral) and not -2**63 <= value < 2**63:
+        check(lib.occseg_params_set(handle, key, str(value).encode()))  # the library names the bound
+    elif isinstance(value, numbers.Integral):
+        check(lib.occseg_params_set_int(handle, key, int(value)))
+    else:
+        check(lib.occseg_params_set_double(handle, key, float(value)))
+
+
+def get_param(handle, name):
+    """Any parameter's value as the text occseg_params_set accepts."""
+    n = ctypes.c_size_t()
+    check(lib.occseg_params_get(handle, name.encode(), None, 0, ctypes.byref(n)))
+    buf = ctypes.create_string_buffer(n.value + 1)
+    check(lib.occseg_params_get(handle, name.encode(), buf, len(buf), None))
+    return buf.value.decode()
