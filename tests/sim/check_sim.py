@@ -1,0 +1,92 @@
+"""Runs `occseg simulate` and `occseg evaluate` as a user would and checks files, determinism,
+exit codes and messages."""
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+
+occseg, work = sys.argv[1], sys.argv[2]
+
+
+def run(*args):
+    return subprocess.run([occseg, *args], capture_output=True, text=True)
+
+
+def sim(out, *extra):
+    r = run("simulate", "--scene", "cone", "--dims", "64", "64", "16", "--out", out, *extra)
+    assert r.returncode == 0, r.stderr
+    return out
+
+
+a = sim(os.path.join(work, "a"))
+m = np.load(os.path.join(a, "map.npy"))
+st = np.load(os.path.join(a, "truth_state.npy"))
+ob = np.load(os.path.join(a, "truth_objects.npy"))
+assert m.dtype == np.float32 and m.shape == (16, 64, 64), (m.dtype, m.shape)
+assert st.dtype == np.uint8 and st.shape == m.shape and set(np.unique(st)) == {0, 1, 2}
+assert ob.dtype == np.uint8 and set(np.unique(ob)) == {0, 1}
+assert ((m >= 0.12 - 1e-6) & (m <= 0.97 + 1e-6)).all()
+assert (m == 0.5).any() and (m > 0.5).any() and (m < 0.5).any()
+# The cone stands on the floor and narrows upwards: fewer object voxels in higher layers.
+per_layer = (ob == 1).sum(axis=(1, 2))
+assert per_layer[0] > per_layer[8] > 0, per_layer
+doc = json.load(open(os.path.join(a, "scene.json")))
+assert doc["scene"] == "cone" and doc["dims"] == [64, 64, 16] and doc["seed"] == 1
+assert doc["objects"] == [{"id": 1, "name": "cone", "voxels": int((ob == 1).sum())}]
+assert doc["sensor"]["range_sigma"] == 0.04 and doc["sensor"]["angle_step_deg"] == 0.5
+assert doc["truth_states"]["occupied"] == int((st == 2).sum())
+
+# Deterministic from the seed, whatever the thread count.
+b = sim(os.path.join(work, "b"), "--threads", "1")
+for f in ("map.npy", "truth_state.npy", "truth_objects.npy"):
+    assert open(os.path.join(a, f), "rb").read() == open(os.path.join(b, f), "rb").read(), f
+c = sim(os.path.join(work, "c"), "--seed", "2")
+assert not np.array_equal(np.load(os.path.join(c, "map.npy")), m)
+assert np.array_equal(np.load(os.path.join(c, "truth_state.npy")), st), "the truth has no noise"
+
+# evaluate: all methods side by side, JSON.
+r = run("evaluate", "--truth", a, "--json")
+assert r.returncode == 0, r.stderr
+res = json.loads(r.stdout)
+assert [x["method"] for x in res["results"]] == ["paper", "default", "baseline", "ideal"]
+ideal = res["results"][3]["scores"]
+assert ideal["accuracy"] == 1.0 and ideal["iou"]["occupied"] == 1.0 and ideal["unknown_free"] == 0
+for x in res["results"]:
+    s = x["scores"]
+    assert s["voxels"] == 64 * 64 * 16 and 0.9 < s["accuracy"] <= 1.0, (x["method"], s["accuracy"])
+    assert s["objects"][0]["name"] == "cone"
+
+# evaluate an existing segmentation: the same numbers as --method default.
+seg = os.path.join(work, "seg")
+r = run("segment", os.path.join(a, "map.npy"), "--out", seg)
+assert r.returncode == 0, r.stderr
+r = run("evaluate", "--truth", a, "--labels", os.path.join(seg, "labels.npy"), "--segments",
+        os.path.join(seg, "segments.json"), "--json")
+assert r.returncode == 0, r.stderr
+mine = json.loads(r.stdout)["results"][0]["scores"]
+assert mine == res["results"][1]["scores"], "labels + segments.json score like --method default"
+r = run("evaluate", "--truth", a, "--method", "baseline")
+assert r.returncode == 0 and "voxel accuracy" in r.stdout and "baseline" in r.stdout, r.stdout
+
+# Bad input: a message naming the problem, exit code 1 (usage) or 2 (bad input), no output.
+r = run("simulate", "--scene", "pyramid", "--out", os.path.join(work, "x"))
+assert r.returncode == 1 and "pyramid" in r.stderr, r.stderr
+assert not os.path.exists(os.path.join(work, "x"))
+r = run("simulate", "--scene", "cone", "--dims", "8", "8", "8", "--out", os.path.join(work, "y"))
+assert r.returncode == 2 and "16 x 16 x 8" in r.stderr, (r.returncode, r.stderr)
+assert not os.path.exists(os.path.join(work, "y", "map.npy"))
+r = run("evaluate", "--truth", os.path.join(work, "missing"))
+assert r.returncode == 2 and "missing" in r.stderr, r.stderr
+np.save(os.path.join(work, "small_labels.npy"), np.zeros((4, 4, 4), np.uint32))
+r = run("evaluate", "--truth", a, "--labels", os.path.join(work, "small_labels.npy"), "--segments",
+        os.path.join(seg, "segments.json"))
+assert r.returncode == 2 and "small_labels.npy" in r.stderr and "expected 64 x 64 x 16" in r.stderr, r.stderr
+np.save(os.path.join(work, "big_labels.npy"), np.full((16, 64, 64), 10 ** 6, np.uint32))
+r = run("evaluate", "--truth", a, "--labels", os.path.join(work, "big_labels.npy"), "--segments",
+        os.path.join(seg, "segments.json"))
+assert r.returncode == 2 and "label 1000000" in r.stderr, r.stderr
+r = run("evaluate", "--truth", a, "--labels", os.path.join(seg, "labels.npy"))
+assert r.returncode == 1 and "--segments" in r.stderr, r.stderr
+print("cli simulate/evaluate: all checks passed")
