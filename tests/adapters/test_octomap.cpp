@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -206,8 +207,9 @@ TEST(OctomapGraph, SphericalScanFusedLikeOctomap) {
         agree += mine == theirs;
         occ += mine == 2;
       }
+  std::printf("spherical scan: %zu of %zu observed voxels agree with OctoMap, %zu occupied\n", agree, both, occ);
   EXPECT_GT(occ, 500u);
-  EXPECT_GE(double(agree) / both, 0.97) << agree << " of " << both;
+  EXPECT_GE(double(agree) / both, 0.995) << agree << " of " << both;
 }
 
 TEST(OctomapFiles, BadFilesGiveStatusesNamingTheFile) {
