@@ -119,7 +119,8 @@ void BM_Labelling(benchmark::State& state) {
   const Inputs& in = inputs(static_cast<int>(state.range(0)));
   std::vector<std::uint32_t> labels;
   std::vector<Segment> segments;
-  for (auto _ : state) label_components(in.refined_default, in.grid, labels, segments);
+  const int threads = static_cast<int>(state.range(1));
+  for (auto _ : state) label_components(in.refined_default, in.grid, labels, segments, threads);
   counters(state, in.grid.p.size());
 }
 
@@ -165,7 +166,7 @@ BENCHMARK(BM_Creation)->Apply(stage_args);
 BENCHMARK(BM_RefineUnknown)->Apply(stage_args);
 BENCHMARK(BM_RefineBoundaries)->Apply(stage_args);
 BENCHMARK(BM_VoxelRules)->Apply(stage_args);
-BENCHMARK(BM_Labelling)->ArgNames({"noisy", "threads"})->Args({0, 1})->Args({1, 1})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Labelling)->Apply(stage_args);
 BENCHMARK(BM_SegmentPaper)->Apply(stage_args);
 BENCHMARK(BM_SegmentDefault)->Apply(stage_args);
 BENCHMARK(BM_SegmentDefaultSize)->ArgNames({"n", "nz"})->Args({160, 64})->Args({320, 128})->Args({512, 256})

@@ -4,13 +4,18 @@
 #include <limits>
 
 #include "occseg/error.hpp"
+#include "occseg/parallel.hpp"
+
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 namespace occseg {
 
 namespace {
 
-// Union-find over voxel indices stored in the labels array itself (no extra memory). Roots are
-// always the smallest index of their set, so the final numbering follows scan order.
+// Union-find whose roots are always the smallest index of their set, so that numbering roots in
+// index order numbers sets by their first element.
 inline std::uint32_t find(std::uint32_t* parent, std::uint32_t i) {
   while (parent[i] != i) {
     parent[i] = parent[parent[i]];
@@ -19,77 +24,212 @@ inline std::uint32_t find(std::uint32_t* parent, std::uint32_t i) {
   return i;
 }
 
-inline std::uint32_t unite(std::uint32_t* parent, std::uint32_t a, std::uint32_t b) {
+inline void unite(std::uint32_t* parent, std::uint32_t a, std::uint32_t b) {
   a = find(parent, a);
   b = find(parent, b);
-  if (a == b) return a;
+  if (a == b) return;
   if (a < b) std::swap(a, b);
   parent[a] = b;
-  return b;
 }
+
+// First x in [x, e) with (s[x] == v) == want, or e. 16 voxels per step where SSE2 exists
+// (every x86-64): runs of one state are long in real maps.
+inline std::size_t find_first(const std::uint8_t* s, std::uint8_t v, bool want, std::size_t x, std::size_t e) {
+#ifdef __SSE2__
+  const __m128i vv = _mm_set1_epi8(static_cast<char>(v));
+  while (x + 16 <= e) {
+    unsigned m = static_cast<unsigned>(_mm_movemask_epi8(
+        _mm_cmpeq_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(s + x)), vv)));
+    if (!want) m = ~m & 0xFFFFu;
+    if (m) return x + static_cast<std::size_t>(__builtin_ctz(m));
+    x += 16;
+  }
+#endif
+  while (x < e && (s[x] == v) != want) ++x;
+  return x;
+}
+
+// End of the run of equal states that starts at x in row `s` of length nx.
+inline std::size_t run_end(const std::uint8_t* s, std::size_t x, std::size_t nx) {
+  return find_first(s, s[x], false, x + 1, nx);
+}
+
+// Unites run [x0, x1) of row `cur` (label root `rs`) with every stretch of equal state in the
+// row `other` next to it (one union per stretch: the voxels of a stretch share one run).
+inline void unite_stretches(std::uint32_t* labels, const std::uint8_t* cur, const std::uint8_t* other,
+                            std::size_t other_index, std::size_t x0, std::size_t x1, std::uint32_t rs) {
+  const std::uint8_t v = cur[x0];
+  std::size_t x = x0;
+  while (x < x1) {
+    x = find_first(other, v, true, x, x1);
+    if (x == x1) break;
+    unite(labels, rs, labels[other_index + x]);
+    x = find_first(other, v, false, x + 1, x1);
+  }
+}
+
+struct SlotStats {  // one segment's share of one slab
+  std::uint32_t id;
+  State state;
+  std::uint64_t voxels = 0;
+  double mop = 0;
+  std::uint32_t lo[3], hi[3];
+  std::uint64_t sum[3] = {0, 0, 0};
+};
 
 }  // namespace
 
-void label_components(const std::vector<std::uint8_t>& st, const Grid& g,
-                      std::vector<std::uint32_t>& labels, std::vector<Segment>& segments) {
+void label_components(const std::vector<std::uint8_t>& st, const Grid& g, std::vector<std::uint32_t>& labels,
+                      std::vector<Segment>& segments, int threads) {
   const std::size_t n = g.dims.count();
   if (n >= std::numeric_limits<std::uint32_t>::max())
     throw Error(Status::unsupported, "maps of " + std::to_string(n) +
                                          " voxels exceed the uint32 labels (at most 2^32 - 2 voxels)");
-  const std::size_t nx = g.dims.nx, ny = g.dims.ny, sz = nx * ny;
+  const std::size_t nx = g.dims.nx, ny = g.dims.ny, nz = g.dims.nz, sz = nx * ny;
+  const std::size_t slabs = (nz + kLabelSlab - 1) / kLabelSlab;
   labels.resize(n);
-  std::uint32_t* parent = labels.data();
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t u = static_cast<std::uint32_t>(i);
-    std::uint32_t root = u;
-    const std::size_t x = i % nx, y = (i / nx) % ny, z = i / sz;
-    parent[u] = u;
-    if (x > 0 && st[i - 1] == st[i]) root = unite(parent, root, u - 1);
-    if (y > 0 && st[i - nx] == st[i]) root = unite(parent, root, static_cast<std::uint32_t>(i - nx));
-    if (z > 0 && st[i - sz] == st[i]) root = unite(parent, root, static_cast<std::uint32_t>(i - sz));
-    (void)root;
-  }
-  // Second pass: roots get consecutive ids in scan order. A non-root's parent is a smaller index
-  // of the same set, already rewritten to the set's id, so no find() (whose path compression
-  // would walk over rewritten entries) is needed.
-  segments.clear();
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t u = static_cast<std::uint32_t>(i);
-    const std::uint32_t r = parent[u];
-    std::uint32_t id;
-    if (r == u) {
-      id = static_cast<std::uint32_t>(segments.size());
-      Segment s;
-      s.id = id;
-      s.state = static_cast<State>(st[i]);
-      s.bbox_min = {std::numeric_limits<std::uint32_t>::max(), std::numeric_limits<std::uint32_t>::max(),
-                    std::numeric_limits<std::uint32_t>::max()};
-      segments.push_back(s);
-    } else {
-      id = labels[r];
+  std::uint32_t* lab = labels.data();
+  const std::uint8_t* s = st.data();
+  const float* p = g.p.data();
+
+  // 1. Each slab on its own: runs along x, united with the rows before them in y and z (inside
+  // the slab), then numbered 0..m-1 by first voxel; labels hold these local numbers.
+  std::vector<std::uint32_t> local_count(slabs, 0);
+  parallel_for(slabs, threads, [&](std::size_t s0, std::size_t s1) {
+    for (std::size_t sl = s0; sl < s1; ++sl) {
+      const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab);
+      for (std::size_t z = zb; z < ze; ++z)
+        for (std::size_t y = 0; y < ny; ++y) {
+          const std::size_t i0 = nx * (y + ny * z);
+          const std::uint8_t* row = s + i0;
+          for (std::size_t x = 0; x < nx;) {
+            const std::size_t e = run_end(row, x, nx);
+            const auto rs = static_cast<std::uint32_t>(i0 + x);
+            std::fill(lab + i0 + x, lab + i0 + e, rs);
+            if (y > 0) unite_stretches(lab, row, row - nx, i0 - nx, x, e, rs);
+            if (z > zb) unite_stretches(lab, row, row - sz, i0 - sz, x, e, rs);
+            x = e;
+          }
+        }
+      // Local numbering: a run start's parent is a smaller run start of the slab, already
+      // renumbered (the parent array is being overwritten in index order).
+      std::uint32_t m = 0;
+      for (std::size_t i0 = zb * sz; i0 < ze * sz; i0 += nx)
+        for (std::size_t x = 0; x < nx;) {
+          const std::size_t e = run_end(s + i0, x, nx);
+          const std::size_t rs = i0 + x;
+          const std::uint32_t par = lab[rs];
+          const std::uint32_t id = par == rs ? m++ : lab[par];
+          std::fill(lab + rs, lab + i0 + e, id);
+          x = e;
+        }
+      local_count[sl] = m;
     }
-    labels[i] = id;
+  });
+
+  // 2. Join the slabs: union-find over all local components (global index = base + local id),
+  // uniting across each slab's first plane; roots are the earliest components in scan order.
+  std::vector<std::uint32_t> base(slabs + 1, 0);
+  for (std::size_t sl = 0; sl < slabs; ++sl) base[sl + 1] = base[sl] + local_count[sl];
+  std::vector<std::uint32_t> parent(base[slabs]);
+  for (std::uint32_t k = 0; k < base[slabs]; ++k) parent[k] = k;
+  for (std::size_t sl = 1; sl < slabs; ++sl) {
+    const std::size_t z = sl * kLabelSlab;
+    std::uint32_t last_a = std::numeric_limits<std::uint32_t>::max(), last_b = last_a;
+    for (std::size_t i = z * sz; i < (z + 1) * sz; ++i) {
+      if (s[i] != s[i - sz]) continue;
+      const std::uint32_t a = base[sl] + lab[i], b = base[sl - 1] + lab[i - sz];
+      if (a == last_a && b == last_b) continue;
+      unite(parent.data(), a, b);
+      last_a = a;
+      last_b = b;
+    }
   }
-  // Statistics, accumulated in scan order (deterministic sums).
-  for (auto& s : segments) s.centroid = {0, 0, 0};
-  for (std::size_t z = 0, i = 0; z < g.dims.nz; ++z)
-    for (std::size_t y = 0; y < ny; ++y)
-      for (std::size_t x = 0; x < nx; ++x, ++i) {
-        Segment& s = segments[labels[i]];
-        ++s.voxels;
-        s.mop += g.p[i];
-        const std::uint32_t c[3] = {static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y),
-                                    static_cast<std::uint32_t>(z)};
+  // Final ids in order of first voxel: a component's root precedes it.
+  std::vector<std::uint32_t> final_id(base[slabs]);
+  std::uint32_t count = 0;
+  for (std::uint32_t k = 0; k < base[slabs]; ++k) {
+    const std::uint32_t r = find(parent.data(), k);
+    final_id[k] = r == k ? count++ : final_id[r];
+  }
+
+  // 3. Final labels and per-slab statistics: each slab sums its voxels of every segment in scan
+  // order, into one slot per segment present in the slab.
+  std::vector<std::vector<SlotStats>> slots(slabs);
+  parallel_for(slabs, threads, [&](std::size_t s0, std::size_t s1) {
+    for (std::size_t sl = s0; sl < s1; ++sl) {
+      const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab);
+      // Slot of each local component: segments present in this slab, in order of first voxel.
+      std::vector<std::uint32_t> ids(final_id.begin() + base[sl], final_id.begin() + base[sl + 1]);
+      std::vector<std::uint32_t> uniq = ids;
+      std::sort(uniq.begin(), uniq.end());
+      uniq.erase(std::unique(uniq.begin(), uniq.end()), uniq.end());
+      std::vector<SlotStats>& out = slots[sl];
+      out.resize(uniq.size());
+      for (std::size_t k = 0; k < uniq.size(); ++k) {
+        out[k].id = uniq[k];
         for (int a = 0; a < 3; ++a) {
-          s.bbox_min[a] = std::min(s.bbox_min[a], c[a]);
-          s.bbox_max[a] = std::max(s.bbox_max[a], c[a]);
-          s.centroid[a] += c[a];
+          out[k].lo[a] = std::numeric_limits<std::uint32_t>::max();
+          out[k].hi[a] = 0;
         }
       }
-  for (auto& s : segments) {
-    const double v = static_cast<double>(s.voxels);
-    s.mop /= v;
-    for (int a = 0; a < 3; ++a) s.centroid[a] /= v;
+      std::vector<std::uint32_t> slot(ids.size());
+      for (std::size_t k = 0; k < ids.size(); ++k)
+        slot[k] = static_cast<std::uint32_t>(std::lower_bound(uniq.begin(), uniq.end(), ids[k]) - uniq.begin());
+      for (std::size_t z = zb; z < ze; ++z)
+        for (std::size_t y = 0; y < ny; ++y) {
+          const std::size_t i0 = nx * (y + ny * z);
+          for (std::size_t x = 0; x < nx;) {
+            const std::uint32_t l = lab[i0 + x];
+            const std::size_t e = run_end(s + i0, x, nx);  // a run: voxels of one component
+            SlotStats& t = out[slot[l]];
+            t.state = static_cast<State>(s[i0 + x]);
+            std::fill(lab + i0 + x, lab + i0 + e, ids[l]);
+            double acc = t.mop;
+            for (std::size_t k = x; k < e; ++k) acc += p[i0 + k];  // scan order within the slab
+            t.mop = acc;
+            const std::uint64_t len = e - x;
+            t.voxels += len;
+            t.sum[0] += (static_cast<std::uint64_t>(x) + e - 1) * len / 2;
+            t.sum[1] += y * len;
+            t.sum[2] += z * len;
+            t.lo[0] = std::min<std::uint32_t>(t.lo[0], static_cast<std::uint32_t>(x));
+            t.hi[0] = std::max<std::uint32_t>(t.hi[0], static_cast<std::uint32_t>(e - 1));
+            t.lo[1] = std::min<std::uint32_t>(t.lo[1], static_cast<std::uint32_t>(y));
+            t.hi[1] = std::max<std::uint32_t>(t.hi[1], static_cast<std::uint32_t>(y));
+            t.lo[2] = std::min<std::uint32_t>(t.lo[2], static_cast<std::uint32_t>(z));
+            t.hi[2] = std::max<std::uint32_t>(t.hi[2], static_cast<std::uint32_t>(z));
+            x = e;
+          }
+        }
+    }
+  });
+
+  // 4. The segment table: slab shares added in slab order.
+  segments.assign(count, Segment());
+  std::vector<std::array<std::uint64_t, 3>> sums(count, {0, 0, 0});
+  for (std::uint32_t k = 0; k < count; ++k) {
+    segments[k].id = k;
+    segments[k].bbox_min.fill(std::numeric_limits<std::uint32_t>::max());
+  }
+  for (std::size_t sl = 0; sl < slabs; ++sl)
+    for (const SlotStats& t : slots[sl]) {
+      Segment& seg = segments[t.id];
+      seg.state = t.state;
+      seg.voxels += t.voxels;
+      seg.mop += t.mop;
+      for (int a = 0; a < 3; ++a) {
+        seg.bbox_min[a] = std::min(seg.bbox_min[a], t.lo[a]);
+        seg.bbox_max[a] = std::max(seg.bbox_max[a], t.hi[a]);
+        sums[t.id][a] += t.sum[a];
+      }
+    }
+  for (std::uint32_t k = 0; k < count; ++k) {
+    Segment& seg = segments[k];
+    const double v = static_cast<double>(seg.voxels);
+    seg.mop /= v;
+    // Integer coordinate sums are exact; the double sum they replace was exact below 2^53.
+    for (int a = 0; a < 3; ++a) seg.centroid[a] = static_cast<double>(sums[k][a]) / v;
   }
 }
 

@@ -69,7 +69,7 @@ Result segment(const Grid& grid, const Params& params, bool keep_stages) {
     if (params.preset == Preset::default_preset) apply_voxel_rules(states, own, grid.dims, params);
   }
   st.begin("labelling");
-  label_components(states, grid, r.labels, r.segments);
+  label_components(states, grid, r.labels, r.segments, params.threads);
   st.end();
   return r;
 }

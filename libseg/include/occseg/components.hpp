@@ -19,10 +19,15 @@ struct Segment {
   std::array<double, 3> centroid{0, 0, 0};         // mean voxel index (x, y, z)
 };
 
+// z-planes per labelling slab. Slabs are labelled in parallel; the mean occupancy of a segment is
+// summed in scan order within each slab and the slab sums are added in slab order, so the result
+// depends on this constant but never on the thread count (docs/performance.md).
+constexpr std::size_t kLabelSlab = 8;
+
 // Labels each 6-connected region of equal state 0..N-1, numbered in the order of their first
 // voxel (x fastest), and fills `segments` (index = id). Throws Error(unsupported) beyond 2^32-1
-// voxels, since labels are uint32.
+// voxels, since labels are uint32. `threads` as in Params (0: all cores); results never depend on it.
 void label_components(const std::vector<std::uint8_t>& states, const Grid& grid,
-                      std::vector<std::uint32_t>& labels, std::vector<Segment>& segments);
+                      std::vector<std::uint32_t>& labels, std::vector<Segment>& segments, int threads = 0);
 
 }  // namespace occseg

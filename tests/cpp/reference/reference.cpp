@@ -366,12 +366,16 @@ void label(const std::vector<std::uint8_t>& st, const Grid& g, std::vector<std::
     }
     labels[i] = id;
   }
-  for (std::size_t z = 0, i = 0; z < g.dims.nz; ++z)
+  // Mean occupancy: summed in scan order within each slab of kLabelSlab z-planes, the slab sums
+  // added in slab order (the documented order of label_components()).
+  std::vector<double> part(segments.size(), 0.0);
+  for (std::size_t z = 0, i = 0; z < g.dims.nz; ++z) {
+    if (z % kLabelSlab == 0) std::fill(part.begin(), part.end(), 0.0);
     for (std::size_t y = 0; y < ny; ++y)
       for (std::size_t x = 0; x < nx; ++x, ++i) {
         Segment& s = segments[labels[i]];
         ++s.voxels;
-        s.mop += g.p[i];
+        part[labels[i]] += g.p[i];
         const std::uint32_t c[3] = {static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y),
                                     static_cast<std::uint32_t>(z)};
         for (int a = 0; a < 3; ++a) {
@@ -380,6 +384,9 @@ void label(const std::vector<std::uint8_t>& st, const Grid& g, std::vector<std::
           s.centroid[a] += c[a];
         }
       }
+    if (z % kLabelSlab == kLabelSlab - 1 || z + 1 == g.dims.nz)
+      for (std::size_t k = 0; k < segments.size(); ++k) segments[k].mop += part[k];
+  }
   for (auto& s : segments) {
     const double v = static_cast<double>(s.voxels);
     s.mop /= v;
