@@ -66,17 +66,28 @@ void half_mask(const std::uint8_t* own, std::uint8_t* m, std::size_t n) {
 
 // The per-voxel rules on one row of voxels (x in [0, n)); xm/xp, ym/yp, zm/zp are the own states
 // of the neighbours, with `none` (all free) rows standing in outside the map.
+inline std::uint8_t rule(std::uint8_t s, std::uint8_t o, std::uint8_t region, bool touches) {
+  const std::uint8_t gap = ((s == kFree) & touches) ? kUnknown : s;
+  return o != kUnknown ? o : (region ? kUnknown : gap);
+}
+
 __attribute__((target_clones("avx2", "default")))
-void rules_row(std::uint8_t* st, const std::uint8_t* own, const std::uint8_t* region, const std::uint8_t* ym,
-               const std::uint8_t* yp, const std::uint8_t* zm, const std::uint8_t* zp, std::size_t n) {
-  for (std::size_t x = 0; x < n; ++x) {
-    const std::uint8_t o = own[x];
-    const bool touches = (x > 0 && own[x - 1] == kOccupied) | (x + 1 < n && own[x + 1] == kOccupied) |
-                         (ym[x] == kOccupied) | (yp[x] == kOccupied) | (zm[x] == kOccupied) | (zp[x] == kOccupied);
-    const std::uint8_t s = st[x];
-    const std::uint8_t gap = (s == kFree && touches) ? kUnknown : s;
-    st[x] = o != kUnknown ? o : (region[x] ? kUnknown : gap);
+void rules_row(std::uint8_t* __restrict st, const std::uint8_t* __restrict own, const std::uint8_t* __restrict region,
+               const std::uint8_t* __restrict ym, const std::uint8_t* __restrict yp, const std::uint8_t* __restrict zm,
+               const std::uint8_t* __restrict zp, std::size_t n) {
+  auto across = [&](std::size_t x) {  // occupied neighbour in y or z
+    return (ym[x] == kOccupied) | (yp[x] == kOccupied) | (zm[x] == kOccupied) | (zp[x] == kOccupied);
+  };
+  if (n == 1) {
+    st[0] = rule(st[0], own[0], region[0], across(0));
+    return;
   }
+  for (std::size_t x = 1; x + 1 < n; ++x) {
+    const bool touches = (own[x - 1] == kOccupied) | (own[x + 1] == kOccupied) | across(x);
+    st[x] = rule(st[x], own[x], region[x], touches);
+  }
+  st[0] = rule(st[0], own[0], region[0], (own[1] == kOccupied) | across(0));
+  st[n - 1] = rule(st[n - 1], own[n - 1], region[n - 1], (own[n - 2] == kOccupied) | across(n - 1));
 }
 
 }  // namespace

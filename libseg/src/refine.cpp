@@ -52,17 +52,32 @@ inline bool is_boundary(std::uint8_t a, std::uint8_t s) {
   return (a == kFree && s == kOccupied) || (a == kOccupied && s == kFree);
 }
 
+// ---- vector tests: is there anything to do in these n voxels? ----
+
+// Some cur[x] free at 0.5 (own unknown) right after an unknown prev[x].
+__attribute__((target_clones("avx2", "default")))
+bool any_unknown_seed(const std::uint8_t* __restrict prev, const std::uint8_t* __restrict cur,
+                      const std::uint8_t* __restrict own, std::size_t n) {
+  std::uint8_t any = 0;
+  for (std::size_t x = 0; x < n; ++x)
+    any |= static_cast<std::uint8_t>((prev[x] == kUnknown) & (cur[x] == kFree) & (own[x] == kUnknown));
+  return any != 0;
+}
+
+// Some free/occupied pair a[x], b[x] (states are 0..2, so only those two differ by xor 2).
+__attribute__((target_clones("avx2", "default")))
+bool any_boundary(const std::uint8_t* __restrict a, const std::uint8_t* __restrict b, std::size_t n) {
+  std::uint8_t any = 0;
+  for (std::size_t x = 0; x < n; ++x) any |= static_cast<std::uint8_t>((a[x] ^ b[x]) == (kFree ^ kOccupied));
+  return any != 0;
+}
+
 // ---- scans along x: one row at a time, rows without any candidate skipped by a vector test ----
 
 void unknown_row(std::uint8_t* st, const std::uint8_t* own, std::size_t len, int step) {
   if (len < 2) return;
   // A row changes only if some free voxel at 0.5 follows an unknown one in scan order.
-  bool any = false;
-  if (step > 0) {
-    for (std::size_t k = 1; k < len; ++k) any |= (st[k - 1] == kUnknown) & (st[k] == kFree) & (own[k] == kUnknown);
-  } else {
-    for (std::size_t k = 0; k + 1 < len; ++k) any |= (st[k + 1] == kUnknown) & (st[k] == kFree) & (own[k] == kUnknown);
-  }
+  const bool any = step > 0 ? any_unknown_seed(st, st + 1, own + 1, len - 1) : any_unknown_seed(st + 1, st, own, len - 1);
   if (!any) return;
   if (step > 0) {
     for (std::size_t k = 1; k < len; ++k)
@@ -75,12 +90,7 @@ void unknown_row(std::uint8_t* st, const std::uint8_t* own, std::size_t len, int
 
 void boundary_row(std::uint8_t* st, const std::uint8_t* own, std::size_t len, int step, int look) {
   if (len < 2) return;
-  bool any = false;  // windows only ever start at a free/occupied boundary
-  for (std::size_t k = 1; k < len; ++k) {
-    const unsigned a = st[k - 1], s = st[k];
-    any |= (a ^ s) == (kFree ^ kOccupied);
-  }
-  if (!any) return;
+  if (!any_boundary(st, st + 1, len - 1)) return;  // windows only ever start at a boundary
   const std::ptrdiff_t stride = step;
   std::uint8_t* first = step > 0 ? st : st + len - 1;
   const std::uint8_t* ofirst = step > 0 ? own : own + len - 1;
@@ -122,9 +132,12 @@ inline Plane plane_shape(const Dims& d, int axis) {
 }
 
 __attribute__((target_clones("avx2", "default")))
-void unknown_step_rows(const std::uint8_t* prev, std::uint8_t* cur, const std::uint8_t* own, std::size_t n) {
-  for (std::size_t x = 0; x < n; ++x)
-    cur[x] = (prev[x] == kUnknown && cur[x] == kFree && own[x] == kUnknown) ? kUnknown : cur[x];
+void unknown_step_rows(const std::uint8_t* __restrict prev, std::uint8_t* __restrict cur,
+                       const std::uint8_t* __restrict own, std::size_t n) {
+  for (std::size_t x = 0; x < n; ++x) {
+    const bool grow = (prev[x] == kUnknown) & (cur[x] == kFree) & (own[x] == kUnknown);
+    cur[x] = grow ? kUnknown : cur[x];
+  }
 }
 
 void unknown_plane(std::uint8_t* st, const std::uint8_t* own, std::size_t nx, Plane pl, int step) {
@@ -139,12 +152,11 @@ void unknown_plane(std::uint8_t* st, const std::uint8_t* own, std::size_t nx, Pl
 // True when some lane with no window in progress sees a free/occupied boundary; otherwise counts
 // the running windows down.
 __attribute__((target_clones("avx2", "default")))
-bool boundary_lanes(const std::uint8_t* prev, const std::uint8_t* cur, std::uint8_t* skip, std::size_t n) {
-  unsigned any = 0;
-  for (std::size_t x = 0; x < n; ++x) {
-    const unsigned a = prev[x], s = cur[x];
-    any |= ((a ^ s) == (kFree ^ kOccupied)) & (skip[x] == 0);
-  }
+bool boundary_lanes(const std::uint8_t* __restrict prev, const std::uint8_t* __restrict cur,
+                    std::uint8_t* __restrict skip, std::size_t n) {
+  std::uint8_t any = 0;
+  for (std::size_t x = 0; x < n; ++x)
+    any |= static_cast<std::uint8_t>(((prev[x] ^ cur[x]) == (kFree ^ kOccupied)) & (skip[x] == 0));
   if (any) return true;
   for (std::size_t x = 0; x < n; ++x) skip[x] = static_cast<std::uint8_t>(skip[x] - (skip[x] != 0));
   return false;
