@@ -90,3 +90,19 @@ assert r.returncode == 2 and "label 1000000" in r.stderr, r.stderr
 r = run("evaluate", "--truth", a, "--labels", os.path.join(seg, "labels.npy"))
 assert r.returncode == 1 and "--segments" in r.stderr, r.stderr
 print("cli simulate/evaluate: all checks passed")
+
+# figures: scores and a PNG picture for a small scene.
+fig = os.path.join(work, "fig")
+r = run("figures", "--out", fig, "--scene", "cone", "--dims", "64", "64", "16")
+assert r.returncode == 0, r.stderr
+png = open(os.path.join(fig, "cone.png"), "rb").read()
+assert png[:8] == b"\x89PNG\r\n\x1a\n" and b"IHDR" in png[:16] and b"IEND" in png[-12:], png[:16]
+width, height = int.from_bytes(png[16:20], "big"), int.from_bytes(png[20:24], "big")
+assert width >= 3 * 64 and height >= 5 * 64, (width, height)  # 3 slices x 5 rows of 64-voxel panels
+table = open(os.path.join(fig, "results-planar.md")).read()
+assert "| cone | paper |" in table and "| cone | ideal | 100.00 |" in table, table
+res = json.load(open(os.path.join(fig, "results-planar.json")))
+assert [x["method"] for x in res["scenes"][0]["results"]] == ["paper", "default", "baseline", "ideal"]
+r = run("figures", "--out", fig, "--scene", "cone", "--dims", "64", "64")
+assert r.returncode == 1, r.returncode
+print("cli figures: all checks passed")

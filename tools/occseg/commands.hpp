@@ -14,5 +14,6 @@ using Runner = std::function<int()>;
 Runner add_segment(CLI::App& app);
 Runner add_simulate(CLI::App& app);
 Runner add_evaluate(CLI::App& app);
+Runner add_figures(CLI::App& app);
 
 }  // namespace occseg::cli

@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
   std::vector<Runner> runners{add_segment(app)};
   runners.push_back(add_simulate(app));
   runners.push_back(add_evaluate(app));
+  runners.push_back(add_figures(app));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -95,7 +95,8 @@ Truth ground_truth(const Scene& scene, const ScanConfig& config) {
         for (std::size_t x = 0; x < nx; ++x) {
           const std::size_t i = x + nx * (y + ny * z);
           const Vec3 lo = voxel_point(f, double(x), double(y), double(z));
-          const Vec3 c = {lo[0] + 0.5 * vs, lo[1] + 0.5 * vs, lo[2] + 0.5 * vs};
+          // Same arithmetic as sensor_position, so a planar sensor and its layer's centres agree in z.
+          const Vec3 c = voxel_point(f, x + 0.5, y + 0.5, z + 0.5);
           bool occupied = false, free = false;
           // Only a voxel the surface may cross can become occupied; others stop once seen free.
           for (std::size_t k = 0; k < sensors.size() && !occupied && !(free && !surface[i]); ++k) {
@@ -124,7 +125,7 @@ Truth ground_truth(const Scene& scene, const ScanConfig& config) {
             Vec3 d = {c[0] - s[0], c[1] - s[1], c[2] - s[2]};
             const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
             if (len > config.max_range) continue;
-            if (len == 0) {
+            if (len <= 1e-9 * vs) {  // the sensor's own voxel
               free = true;
               continue;
             }
