@@ -1,0 +1,63 @@
+"""A real map: the OctoMap corridor geb079.bt (../shared/data, 487 x 187 x 39 voxels of 8 cm),
+turned into a grid by `occseg segment` (which writes it as map.nrrd next to its labels). The
+bindings, fed that grid straight from the file's bytes, must reproduce the tool's segmentation.
+Needs a build with OctoMap; skipped (with the reason) otherwise."""
+import json
+import os
+import re
+import subprocess
+
+import numpy as np
+import pytest
+
+import occseg
+from test_matches_cli import as_json_rows
+
+DATA = os.environ.get("OCCSEG_SHARED_DATA", os.path.join(os.path.dirname(__file__), "..", "..", "..", "shared", "data"))
+
+
+def read_nrrd(path):
+    """(float32 [z, y, x] array viewing the file's bytes in place, voxel size, origin) of the raw,
+    little-endian, axis-aligned NRRD the tool writes."""
+    raw = open(path, "rb").read()
+    head, _, _ = raw.partition(b"\n\n")
+    fields = dict(line.split(": ", 1) for line in head.decode().splitlines()[1:] if ": " in line)
+    assert fields["type"] == "float" and fields["encoding"] == "raw" and fields["endian"] == "little"
+    nx, ny, nz = map(int, fields["sizes"].split())
+    steps = [float(v) for v in re.findall(r"[-0-9.e]+", fields["space directions"])]
+    assert steps[0] == steps[4] == steps[8]
+    origin = tuple(float(v) for v in re.findall(r"[-0-9.e]+", fields["space origin"]))
+    data = np.frombuffer(raw, dtype="<f4", offset=len(head) + 2, count=nx * ny * nz).reshape(nz, ny, nx)
+    return data, steps[0], origin
+
+
+@pytest.fixture(scope="module")
+def corridor(tmp_path_factory):
+    bt = os.path.join(DATA, "geb079.bt")
+    if not os.path.exists(bt):
+        pytest.fail(f"{bt} is missing (see ../shared/data/README.md)")
+    out = tmp_path_factory.mktemp("geb079") / "out"
+    r = subprocess.run([os.environ["OCCSEG_CLI"], "segment", bt, "--out", str(out)], capture_output=True, text=True)
+    if r.returncode != 0 and "needs OctoMap" in r.stderr:
+        pytest.skip(r.stderr.strip())
+    assert r.returncode == 0, r.stderr
+    return out
+
+
+def test_corridor_matches_the_tool(corridor):
+    grid, voxel_size, origin = read_nrrd(corridor / "map.nrrd")
+    assert grid.shape == (39, 187, 487) and voxel_size == 0.08
+    assert not grid.flags.writeable  # the file's bytes, read in place (possibly misaligned)
+    ref = json.loads((corridor / "segments.json").read_text())
+    ref_labels = np.load(corridor / "labels.npy")
+    with occseg.segment(grid, voxel_size=voxel_size, origin=origin) as r:
+        assert np.array_equal(r.labels, ref_labels)
+        assert as_json_rows(r.segments) == ref["segments"]
+        states = {s.state for s in r.segments}
+        assert states == set(occseg.State) and len(r.segments) > 100  # a real, busy map
+        # the points of an occupied segment lie inside the map's metric box
+        occ = max((s for s in r.segments if s.state == occseg.State.OCCUPIED), key=lambda s: s.voxels)
+        p = r.points(occ.id)
+        lo = np.array(origin)
+        hi = lo + np.array([487, 187, 39]) * voxel_size
+        assert np.all(p > lo) and np.all(p < hi)
