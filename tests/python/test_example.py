@@ -43,3 +43,10 @@ def test_example_reads_a_map_file(tmp_path):
     np.save(tmp_path / "room.npy", m)
     out = run(str(tmp_path / "room.npy"), "--save", str(tmp_path / "s.png"), cwd=tmp_path)
     assert " 2 segments in " in out and "  segment 1: occupied, 60 voxels, mop 0.90, bbox (4, 3, 2)-(8, 6, 4)" in out
+
+
+def test_readme_shows_this_example_verbatim():
+    readme = open(os.path.join(os.path.dirname(EXAMPLE), "..", "..", "README.md")).read()
+    section = readme.split("\n## Python\n", 1)[1].split("\n## ", 1)[0]
+    block = section.split("```python\n", 1)[1].split("```\n", 1)[0]
+    assert block == open(EXAMPLE).read(), "README's Python example differs from bindings/examples/segment_map.py"

@@ -108,3 +108,29 @@ def test_load_plugin_only_with_a_library_that_has_it():
         with pytest.raises(occseg.OccsegError) as e:
             occseg.load_plugin("/nonexistent/plugin.so")
         assert "/nonexistent/plugin.so" in e.value.message
+
+
+def test_concurrent_calls_from_python_threads():
+    """ctypes releases the GIL during occseg_segment: threads run at once, each with its own
+    error text, and get what sequential calls get."""
+    import threading
+    maps = [noisy_scene(seed=s, shape=(36, 44, 52)) for s in range(4)]
+    expected = [occseg.segment(m, threads=1).labels for m in maps]
+    got, errors = [None] * 4, [None] * 4
+
+    def work(i):
+        for _ in range(3):
+            got[i] = occseg.segment(maps[i], threads=1).labels
+            try:
+                occseg.segment(maps[i], smax=3 + i * 2)  # odd: never a power of two
+            except occseg.OccsegError as e:
+                errors[i] = e.message
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for i in range(4):
+        assert np.array_equal(got[i], expected[i])
+        assert f"smax': {3 + i * 2} is not a power of two" in errors[i], errors[i]
