@@ -43,6 +43,9 @@ def main(argv):
         a.set_title(f"occupancy probability, z = {z}")
         b.imshow(result.labels[z], origin="lower", cmap="tab20", interpolation="nearest")
         b.set_title("segments")
+        for ax in (a, b):
+            ax.set_xlabel("x (voxels)")
+            ax.set_ylabel("y (voxels)")
         if save:
             fig.savefig(save)
             print(f"slice written to {save}")
