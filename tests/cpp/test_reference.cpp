@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 #include "occseg/segment.hpp"
@@ -98,4 +99,18 @@ TEST(Reference, OtherParametersMatch) {
     EXPECT_EQ(r.labels, ref.labels);
     expect_same_segments(r.segments, ref.segments, "variant");
   }
+}
+
+// Contrasts exactly on (and one float step either side of) the quantiser's 1/4096 grid: where the
+// vectorised float kernel must hand over to the double arithmetic of texture_unit().
+TEST(Reference, ContrastsOnStepBoundariesMatch) {
+  Grid g(Dims{41, 37, 29}, 0.5f);
+  test::Rng r(99);
+  for (auto& v : g.p) {
+    const int k = 1 + r.below(2000);
+    const float base = 0.5f - static_cast<float>(k) / 4096.0f;  // exact: a multiple of 2^-12
+    const int nudge = r.below(5);
+    v = nudge == 0 ? 0.5f : (nudge == 1 ? base : (nudge == 2 ? std::nextafter(base, 1.0f) : (nudge == 3 ? std::nextafter(base, 0.0f) : 0.75f)));
+  }
+  for (int bins : {8, 64}) EXPECT_EQ(compute_texture(g, bins, 2).codes, reference::texture(g, bins).codes) << bins;
 }
