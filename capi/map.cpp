@@ -157,24 +157,10 @@ int occseg_map_from_buffer(occseg_map** out, const void* data, occseg_dtype dtyp
   return occseg_map_from_buffer_flags(out, data, dtype, dims, strides, voxel_size, OCCSEG_IMPORT_STRICT);
 }
 
-int occseg_map_read(occseg_map** out, const char* path) {
-  return guard("occseg_map_read", [&] {
-    require(out, "out");
-    *out = nullptr;
-    require(path, "path");
-    auto m = std::make_unique<occseg_map>();
-    m->grid = occseg::grid_from_npy(occseg::read_npy(path), 1.0, path);
-    *out = m.release();
-  });
-}
+// By extension, through the registry (capi/plugins.cpp): .npy and .nrrd are built-in plugins.
+int occseg_map_read(occseg_map** out, const char* path) { return occseg_map_read_options(out, path, nullptr); }
 
-int occseg_map_write(const occseg_map* map, const char* path) {
-  return guard("occseg_map_write", [&] {
-    require(map, "map");
-    require(path, "path");
-    occseg::write_grid_npy(path, map->grid);
-  });
-}
+int occseg_map_write(const occseg_map* map, const char* path) { return occseg_map_write_options(map, path, nullptr); }
 
 void occseg_map_free(occseg_map* map) { delete map; }
 

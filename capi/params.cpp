@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "internal.hpp"
+#include "occseg/registry.hpp"
 
 using occseg::Error;
 using occseg::ParamInfo;
@@ -19,10 +20,10 @@ namespace {
 
 [[noreturn]] void invalid(const std::string& message) { throw Error(Status::invalid_argument, message); }
 
+// Built-in parameters and those plugins declared (occseg/registry.hpp); the reference stays valid.
 const ParamInfo& info_of(const char* name) {
   require(name, "name");
-  for (const ParamInfo& i : occseg::param_table())
-    if (std::strcmp(i.name, name) == 0) return i;
+  if (const ParamInfo* i = occseg::find_param(name)) return *i;
   invalid(std::string("parameter '") + name + "': no such parameter");
 }
 
@@ -46,9 +47,13 @@ void copy_text(const std::string& text, char* buf, std::size_t size, std::size_t
   std::memcpy(buf, text.c_str(), text.size() + 1);
 }
 
+// Index into the built-in table followed by the declared parameters (a list that only grows).
 const ParamInfo* table_entry(uint32_t index) {
   const auto& t = occseg::param_table();
-  return index < t.size() ? &t[index] : nullptr;
+  if (index < t.size()) return &t[index];
+  const auto declared = occseg::plugin_params();
+  index -= static_cast<uint32_t>(t.size());
+  return index < declared.size() ? &declared[index]->info : nullptr;
 }
 
 }  // namespace
@@ -173,7 +178,9 @@ int occseg_params_validate(const occseg_params* params) {
   });
 }
 
-uint32_t occseg_param_count(void) { return static_cast<uint32_t>(occseg::param_table().size()); }
+uint32_t occseg_param_count(void) {
+  return static_cast<uint32_t>(occseg::param_table().size() + occseg::plugin_params().size());
+}
 
 const char* occseg_param_name(uint32_t index) {
   const ParamInfo* i = table_entry(index);
@@ -207,7 +214,9 @@ int occseg_param_find(const char* name, uint32_t* index) {
   return guard("occseg_param_find", [&] {
     require(index, "index");
     const ParamInfo& i = info_of(name);
-    *index = static_cast<uint32_t>(&i - occseg::param_table().data());
+    const auto all = occseg::all_params();
+    for (uint32_t k = 0; k < all.size(); ++k)
+      if (std::strcmp(all[k].name, i.name) == 0) *index = k;
   });
 }
 

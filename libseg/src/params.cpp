@@ -6,6 +6,8 @@
 #include <sstream>
 
 #include "occseg/error.hpp"
+#include "occseg/registry.hpp"
+#include "registry_internal.hpp"
 
 namespace occseg {
 
@@ -41,6 +43,8 @@ const std::vector<ParamInfo>& param_table() {
       {"refine_passes", "int", 0, 16, "passes of the six free/occupied refinement scans"},
       {"gap_radius", "int", 0, 16, "default preset: 0.5-voxels holding no (2r+1)^3 cube of 0.5 are gaps between rays"},
       {"threads", "int", 0, 1024, "worker threads, 0 = all cores; results never depend on it"},
+      {"texture", "string", 0, 0, "texture operator by name: lbp6 (paper, 3D), lbp8 (3x3, 2D maps) or one a plugin adds"},
+      {"similarity", "string", 0, 0, "histogram similarity of the division by name: g (eq. 1), chi2 or one a plugin adds"},
   };
   return t;
 }
@@ -53,6 +57,15 @@ const ParamInfo* find_info(const std::string& name) {
   for (const auto& i : param_table())
     if (name == i.name) return &i;
   return nullptr;
+}
+
+void check_stage_names(const Params& p) {
+  if (!find_texture(p.texture))
+    throw Error(Status::invalid_argument, "parameter 'texture': '" + p.texture +
+                                              "' is not a registered texture operator (registered: " + texture_names() + ")");
+  if (!find_similarity(p.similarity))
+    throw Error(Status::invalid_argument, "parameter 'similarity': '" + p.similarity +
+                                              "' is not a registered similarity (registered: " + similarity_names() + ")");
 }
 
 [[noreturn]] void bad(const std::string& name, const std::string& why) {
@@ -77,6 +90,36 @@ double parse_number(const ParamInfo& info, const std::string& text) {
 
 }  // namespace
 
+double check_param_value(const ParamInfo& info, const std::string& text) {
+  return std::string(info.kind) == "string" ? 0.0 : parse_number(info, text);
+}
+
+std::vector<ParamInfo> all_params() {
+  std::vector<ParamInfo> v = param_table();
+  for (const PluginParam* p : plugin_params()) v.push_back(p->info);
+  return v;
+}
+
+const ParamInfo* find_param(const std::string& name) {
+  if (const ParamInfo* i = find_info(name)) return i;
+  const PluginParam* p = find_plugin_param(name);
+  return p ? &p->info : nullptr;
+}
+
+std::string param_default(const std::string& name) {
+  if (find_info(name)) return get_param(Params::defaults(), name);
+  const PluginParam* p = find_plugin_param(name);
+  if (!p) bad(name, "no such parameter");
+  return p->default_value;
+}
+
+std::string param_owner(const std::string& name) {
+  if (find_info(name)) return kBuiltinPlugin;
+  const PluginParam* p = find_plugin_param(name);
+  if (!p) bad(name, "no such parameter");
+  return p->plugin;
+}
+
 void Params::validate() const {
   auto check = [](const char* name, double v) {
     const ParamInfo* info = find_info(name);
@@ -100,6 +143,9 @@ void Params::validate() const {
   if (!is_pow2(smin)) bad("smin", std::to_string(smin) + " is not a power of two");
   if (smin > smax) bad("smin", std::to_string(smin) + " is larger than smax = " + std::to_string(smax));
   if (free_below > occupied_above) bad("free_below", "is above occupied_above");
+  check_stage_names(*this);
+  for (const auto& kv : plugin_values)
+    if (!find_plugin_param(kv.first)) bad(kv.first, "no such parameter");
 }
 
 void set_param(Params& p, const std::string& name, const std::string& value) {
@@ -109,8 +155,21 @@ void set_param(Params& p, const std::string& name, const std::string& value) {
     else bad(name, "'" + value + "' is not a preset (paper, default)");
     return;
   }
+  if (name == "texture" || name == "similarity") {
+    Params q = p;
+    (name == "texture" ? q.texture : q.similarity) = value;
+    check_stage_names(q);
+    p = std::move(q);
+    return;
+  }
   const ParamInfo* info = find_info(name);
-  if (!info) bad(name, "no such parameter");
+  if (!info) {
+    const PluginParam* pp = find_plugin_param(name);
+    if (!pp) bad(name, "no such parameter");
+    check_param_value(pp->info, value);
+    p.plugin_values[name] = value;
+    return;
+  }
   const double v = parse_number(*info, value);
   if (name == "smax") p.smax = static_cast<int>(v);
   else if (name == "smin") p.smin = static_cast<int>(v);
@@ -138,7 +197,12 @@ std::string get_param(const Params& p, const std::string& name) {
   else if (name == "refine_passes") o << p.refine_passes;
   else if (name == "gap_radius") o << p.gap_radius;
   else if (name == "threads") o << p.threads;
-  else bad(name, "no such parameter");
+  else if (name == "texture") o << p.texture;
+  else if (name == "similarity") o << p.similarity;
+  else if (const PluginParam* pp = find_plugin_param(name)) {
+    const auto it = p.plugin_values.find(name);
+    o << (it != p.plugin_values.end() ? it->second : pp->default_value);
+  } else bad(name, "no such parameter");
   return o.str();
 }
 

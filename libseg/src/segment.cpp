@@ -10,6 +10,7 @@
 #include "occseg/departures.hpp"
 #include "occseg/error.hpp"
 #include "occseg/refine.hpp"
+#include "occseg/registry.hpp"
 #include "occseg/texture.hpp"
 
 namespace occseg {
@@ -65,7 +66,7 @@ Result segment(const Grid& grid, const Params& params, bool keep_stages) {
   Stages st(params, r);
 
   st.begin("texture");
-  TextureMap tex = compute_texture(grid, params.contrast_bins, params.threads);
+  TextureMap tex = run_texture(grid, params);  // params.texture; lbp6 runs compute_texture directly
   st.begin("division");
   std::vector<Block> blocks = divide(grid, tex, params);
   tex = TextureMap();  // free the codes before the per-voxel states exist

@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
   runners.push_back(add_simulate(app));
   runners.push_back(add_evaluate(app));
   runners.push_back(add_figures(app));
+  runners.push_back(add_plugins(app));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -37,6 +38,7 @@ int main(int argc, char** argv) {
     return rc == 0 ? kOk : kUsage;
   }
   try {
+    load_cli_plugins();
     for (auto& r : runners) {
       const int rc = r();
       if (rc >= 0) return rc;

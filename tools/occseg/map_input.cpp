@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdio>
 
 #include "occseg/error.hpp"
 #include "occseg/npy.hpp"
 #include "occseg/nrrd.hpp"
+#include "occseg/registry.hpp"
 #ifdef OCCSEG_HAVE_PCL
 #include "occseg/pcd.hpp"
 #endif
@@ -118,8 +120,20 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
 #endif
     return in;
   }
+  if (find_reader(ext)) {  // a reader a plugin registered (occseg plugins lists them)
+    reject(o.bbox.has_value(), "--bbox", ext);
+    reject(scan_opts, "--sensor-origin/--sensor-orientation/--max-range", ext);
+    std::vector<std::string> options;
+    if (o.voxel_size) {
+      char t[64];
+      std::snprintf(t, sizeof t, "voxel_size=%.17g", *o.voxel_size);
+      options.push_back(t);
+    }
+    in.grid = read_map(path, options);
+    return in;
+  }
   throw Error(Status::invalid_argument, "'" + path + "': unknown input type '" + ext +
-                                            "' (use .npy, .nrrd, .pcd, .graph, .bt or .ot)");
+                                            "' (use .npy, .nrrd, .pcd, .graph, .bt, .ot or one a plugin reads)");
 }
 
 void write_cloud_output(const std::string& path, const Grid& grid, const Result& result) {

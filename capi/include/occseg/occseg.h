@@ -200,12 +200,16 @@ OCCSEG_API int occseg_map_from_buffer_flags(occseg_map **out, const void *data, 
                                             const size_t dims[3], const ptrdiff_t strides[3],
                                             double voxel_size, uint32_t flags);
 
-/* Reads a NumPy .npy file (float32, float64, uint8 or uint16, indexed [z, y, x] or [y, x], C or
- * Fortran order). Voxel size 1, origin (0, 0, 0). OCCSEG_EIO if it cannot be read,
- * OCCSEG_EFORMAT if it is not a valid .npy map, OCCSEG_EVALUE for bad probabilities. */
+/* Reads a map with the reader registered for the path's extension (see Plugins below): .npy
+ * (float32, float64, uint8 or uint16, indexed [z, y, x] or [y, x], C or Fortran order; voxel
+ * size 1, origin (0, 0, 0)), .nrrd, or what plugins add. OCCSEG_EIO if it cannot be read,
+ * OCCSEG_EFORMAT if it is not a valid file, OCCSEG_EVALUE for bad probabilities,
+ * OCCSEG_EUNSUPPORTED for an extension no reader handles. */
 OCCSEG_API int occseg_map_read(occseg_map **out, const char *path);
 
-/* Writes the map's probabilities as a float32 .npy file indexed [z, y, x]; all or nothing. */
+/* Writes the map with the writer registered for the path's extension: .npy (float32 [z, y, x]),
+ * .nrrd (float, with voxel size and origin), or what plugins add; all or nothing.
+ * OCCSEG_EUNSUPPORTED for an extension no writer handles. */
 OCCSEG_API int occseg_map_write(const occseg_map *map, const char *path);
 
 /* Frees a map. NULL is a no-op. */
@@ -295,7 +299,76 @@ OCCSEG_API int occseg_result_write(const occseg_result *result, const char *dir)
 /*  Plugins                                                                                   */
 /* ========================================================================================== */
 
-/* Reserved for the plugin interface (occseg_plugins_load, ...), added in a later version. */
+/* Plugins add texture operators, histogram similarities, map readers/writers (by file
+ * extension) and parameters at run time; occseg_plugin.h is the ABI they are written against and
+ * docs/plugins.md explains it. The built-in stages are registered the same way, as the plugins
+ * "builtin" (texture lbp6, lbp8; similarity g, chi2) and "builtin_io" (.npy, .nrrd).
+ *
+ * Thread safety: loading is serialised and transactional (a plugin's stages and parameters
+ * appear all at once, or not at all if it fails), and loaded plugins are never unloaded, so
+ * plugins may be loaded while other threads segment, read maps or enumerate; a segmentation
+ * uses the stages that were registered when it started. Enumeration indices are stable (lists
+ * only grow) and the strings returned live until the process exits. */
+
+/* Loads one plugin file (a shared object exporting occseg_plugin_entry). Fails with
+ * OCCSEG_EPLUGIN, and a last-error text naming the file and the reason, when it cannot be
+ * opened (with the dlerror() text), has no entry point, was built for another plugin ABI major
+ * or a newer minor, uses a plugin, stage, extension or parameter name that is already taken, or
+ * its register function fails; the registry is then unchanged. */
+OCCSEG_API int occseg_plugins_load(const char *path);
+
+/* Loads every *.so file of the plugin search path: the folders of the environment variable
+ * OCCSEG_PLUGIN_PATH (colon-separated), then the install's <libdir>/occseg/plugins (found
+ * next to the loaded liboccseg, so relocated installs work, then at the configured prefix).
+ * A plugin whose name is already loaded is skipped (the first in the path wins). All files are
+ * tried; if any fails, returns OCCSEG_EPLUGIN with every failure in the last-error text.
+ * `loaded` (may be NULL) receives the number of plugins loaded by this call. */
+OCCSEG_API int occseg_plugins_load_default(uint32_t *loaded);
+
+/* The search path of occseg_plugins_load_default, folders joined by ':'; snprintf-like, as
+ * occseg_params_get. */
+OCCSEG_API int occseg_plugin_search_path(char *buf, size_t size, size_t *length);
+
+/* Loaded plugins, built-in ones first, in load order; NULL past the end. The path is "" for
+ * plugins built into the library. */
+OCCSEG_API uint32_t occseg_plugin_count(void);
+OCCSEG_API const char *occseg_plugin_name(uint32_t index);
+OCCSEG_API const char *occseg_plugin_version(uint32_t index);
+OCCSEG_API const char *occseg_plugin_description(uint32_t index);
+OCCSEG_API const char *occseg_plugin_path(uint32_t index);
+/* The plugin ABI a plugin was built for. OCCSEG_ERANGE past the end. */
+OCCSEG_API int occseg_plugin_abi(uint32_t index, uint32_t *major, uint32_t *minor);
+/* The plugin ABI this library implements (OCCSEG_PLUGIN_ABI_MAJOR/MINOR of its occseg_plugin.h). */
+OCCSEG_API void occseg_plugin_host_abi(uint32_t *major, uint32_t *minor);
+
+/* Kinds of registered stages. */
+typedef enum {
+  OCCSEG_STAGE_TEXTURE = 0,    /* texture operators: the parameter texture=NAME */
+  OCCSEG_STAGE_SIMILARITY = 1, /* histogram similarities: the parameter similarity=NAME */
+  OCCSEG_STAGE_READER = 2,     /* map readers: name is the extension, ".bt" */
+  OCCSEG_STAGE_WRITER = 3      /* map writers: name is the extension */
+} occseg_stage_kind;
+
+/* Registered stages of one kind, in registration order (0 for a bad kind); name, one-line
+ * description and the name of the plugin that registered it, NULL past the end. */
+OCCSEG_API uint32_t occseg_stage_count(occseg_stage_kind kind);
+OCCSEG_API const char *occseg_stage_name(occseg_stage_kind kind, uint32_t index);
+OCCSEG_API const char *occseg_stage_description(occseg_stage_kind kind, uint32_t index);
+OCCSEG_API const char *occseg_stage_plugin(occseg_stage_kind kind, uint32_t index);
+
+/* Parameters declared by plugins follow the built-in ones in occseg_param_count/_name/...; these
+ * give the plugin that declared parameter `index` ("builtin" for the core's own; NULL past the
+ * end) and its default value as text (snprintf-like, as occseg_params_get). */
+OCCSEG_API const char *occseg_param_plugin(uint32_t index);
+OCCSEG_API int occseg_param_default(uint32_t index, char *buf, size_t size, size_t *length);
+
+/* occseg_map_read / occseg_map_write pick the reader or writer registered for the path's last
+ * extension (case-insensitive): built in are .npy and .nrrd, plugins add others (.pcd, .bt, ...).
+ * An extension nobody handles fails with OCCSEG_EUNSUPPORTED naming it. These variants pass
+ * reader/writer options: NULL or a NULL-terminated array of "key=value" texts (see the reader's
+ * documentation; unknown keys fail). */
+OCCSEG_API int occseg_map_read_options(occseg_map **out, const char *path, const char *const *options);
+OCCSEG_API int occseg_map_write_options(const occseg_map *map, const char *path, const char *const *options);
 
 #ifdef __cplusplus
 } /* extern "C" */

@@ -4,6 +4,7 @@
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,11 @@ struct Params {
   // rays" and take the state of the texture segmentation around them; thicker ones stay unknown.
   int gap_radius = 1;
   int threads = 0;             // 0: all cores. Results never depend on it.
+  std::string texture = "lbp6";     // texture operator, by name (occseg/registry.hpp)
+  std::string similarity = "g";     // histogram similarity of the division, by name
+  // Values of parameters that plugins declared, as text, by name; unset ones take the declared
+  // default (get_param).
+  std::map<std::string, std::string> plugin_values;
   // Called between stages and inside long ones with a stage name and a fraction in [0, 1].
   // Returning false cancels: segment() throws Error(cancelled).
   std::function<bool(const char* stage, double fraction)> progress;
@@ -42,7 +48,8 @@ struct Params {
   bool at_half(double p) const { return p >= free_below && p <= occupied_above; }
 
   // Throws Error(invalid_argument) naming the parameter when a value is out of its bounds or
-  // the combination is inconsistent (smin > smax, free_below > occupied_above, ...).
+  // the combination is inconsistent (smin > smax, free_below > occupied_above, ...), or when
+  // texture / similarity name no registered stage.
   void validate() const;
 };
 
@@ -53,10 +60,22 @@ struct ParamInfo {
   double min, max;      // bounds for numbers
   const char* description;
 };
+// The built-in parameters (those of this struct), in a fixed order.
 const std::vector<ParamInfo>& param_table();
+// Every parameter known now: param_table() followed by those plugins declared, in load order.
+std::vector<ParamInfo> all_params();
+// A parameter by name, built-in or declared by a plugin; nullptr when unknown. The pointer stays
+// valid for the life of the process.
+const ParamInfo* find_param(const std::string& name);
+// The default value of a parameter as text (the default preset's for built-in ones), and the
+// plugin that declared it ("builtin" for the core's own). Throw for unknown names.
+std::string param_default(const std::string& name);
+std::string param_owner(const std::string& name);
 
 // Sets one parameter by name from text ("smax", "64"); "preset" resets everything to the named
-// preset. Throws Error(invalid_argument) naming the parameter for unknown names or bad values.
+// preset. Parameters declared by loaded plugins are set the same way. Throws
+// Error(invalid_argument) naming the parameter for unknown names or bad values (a texture or
+// similarity name that is not registered is a bad value).
 void set_param(Params& params, const std::string& name, const std::string& value);
 // The current value of a named parameter as text; throws for unknown names.
 std::string get_param(const Params& params, const std::string& name);

@@ -50,7 +50,8 @@ constexpr std::uint16_t kNoTexture = 0xFFFF;
 struct TextureMap {
   std::vector<std::uint16_t> codes;  // lbp * bins + contrast level, or kNoTexture
   int bins = 0;                      // contrast levels
-  int code_count() const { return 64 * bins; }
+  int codes_total = 0;               // distinct codes of other operators (registry.hpp); 0: 64 * bins
+  int code_count() const { return codes_total ? codes_total : 64 * bins; }
 };
 
 // Computes the texture code of every voxel: a first pass collects the contrast distribution for

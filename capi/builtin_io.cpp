@@ -1,0 +1,126 @@
+// The built-in map readers and writers (.npy, .nrrd), registered as the plugin "builtin_io"
+// through the plugin host table when the program or library holding this object starts, so
+// that occseg_map_read / occseg_map_write find them by extension like any plugin's.
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <string>
+
+#include "occseg/error.hpp"
+#include "occseg/npy.hpp"
+#include "occseg/nrrd.hpp"
+#include "occseg/occseg_plugin.h"
+#include "occseg/registry.hpp"
+
+namespace {
+
+using occseg::Error;
+using occseg::Grid;
+
+// Runs `body`, turning occseg::Error into host->set_error plus its status.
+template <class Body>
+int guarded(const occseg_plugin_call* call, Body&& body) {
+  try {
+    body();
+    return 0;
+  } catch (const Error& e) {
+    call->host->set_error(e.what());
+    return static_cast<int>(e.status());
+  } catch (const std::bad_alloc&) {
+    call->host->set_error("out of memory");
+    return OCCSEG_ENOMEM;
+  } catch (const std::exception& e) {
+    call->host->set_error(e.what());
+    return OCCSEG_EINTERNAL;
+  }
+}
+
+// Options of the built-in readers: only voxel_size (for .npy, which stores none).
+double voxel_size_option(const char* path, const char* const* options, bool allowed) {
+  double v = 1.0;
+  for (const char* const* o = options; o && *o; ++o) {
+    const char* eq = std::strchr(*o, '=');
+    if (allowed && eq && std::strncmp(*o, "voxel_size", static_cast<size_t>(eq - *o)) == 0 && eq - *o == 10) {
+      char* end = nullptr;
+      v = std::strtod(eq + 1, &end);
+      if (end == eq + 1 || *end || !(v > 0))
+        throw Error(occseg::Status::invalid_argument, std::string("'") + path + "': option '" + *o +
+                                                          "': voxel_size must be a positive number");
+    } else {
+      throw Error(occseg::Status::invalid_argument, std::string("'") + path + "': unknown option '" + *o + "'" +
+                                                        (allowed ? " (known: voxel_size)" : " (this reader takes none)"));
+    }
+  }
+  return v;
+}
+
+void deliver(const occseg_plugin_call* call, occseg_plugin_map_sink* sink, const Grid& g) {
+  const size_t dims[3] = {g.dims.nx, g.dims.ny, g.dims.nz};
+  float* values = nullptr;
+  if (int rc = call->host->map_alloc(sink, dims, g.voxel_size, g.origin.data(), &values))
+    throw Error(static_cast<occseg::Status>(rc), "map_alloc failed");
+  std::memcpy(values, g.p.data(), g.p.size() * sizeof(float));
+}
+
+Grid grid_of(const occseg_plugin_grid* v) {
+  Grid g;
+  g.dims = occseg::Dims{v->dims[0], v->dims[1], v->dims[2]};
+  g.voxel_size = v->voxel_size;
+  for (int k = 0; k < 3; ++k) g.origin[k] = v->origin[k];
+  g.p.assign(v->values, v->values + g.dims.count());
+  return g;
+}
+
+int read_npy_map(const occseg_plugin_call* call, const char* path, const char* const* options, occseg_plugin_map_sink* sink) {
+  return guarded(call, [&] {
+    const double vs = voxel_size_option(path, options, true);
+    deliver(call, sink, occseg::grid_from_npy(occseg::read_npy(path), vs, path));
+  });
+}
+
+int read_nrrd_map(const occseg_plugin_call* call, const char* path, const char* const* options, occseg_plugin_map_sink* sink) {
+  return guarded(call, [&] {
+    voxel_size_option(path, options, false);
+    deliver(call, sink, occseg::grid_from_nrrd(occseg::read_nrrd(path), path));
+  });
+}
+
+int write_npy_map(const occseg_plugin_call* call, const char* path, const occseg_plugin_grid* grid, const char* const* options) {
+  return guarded(call, [&] {
+    voxel_size_option(path, options, false);
+    occseg::write_grid_npy(path, grid_of(grid));
+  });
+}
+
+int write_nrrd_map(const occseg_plugin_call* call, const char* path, const occseg_plugin_grid* grid, const char* const* options) {
+  return guarded(call, [&] {
+    voxel_size_option(path, options, false);
+    occseg::write_grid_nrrd(path, grid_of(grid));
+  });
+}
+
+int register_io(const occseg_plugin_host* host, occseg_plugin_registrar* r) {
+  const occseg_plugin_reader readers[] = {
+      {sizeof(occseg_plugin_reader), ".npy", "NumPy array [z, y, x] or [y, x]: f4, f8, u1, u2 (option voxel_size, default 1)",
+       read_npy_map, nullptr},
+      {sizeof(occseg_plugin_reader), ".nrrd", "NRRD volume (raw or ascii) with its spacing and origin", read_nrrd_map, nullptr},
+  };
+  const occseg_plugin_writer writers[] = {
+      {sizeof(occseg_plugin_writer), ".npy", "float32 NumPy array [z, y, x]", write_npy_map, nullptr},
+      {sizeof(occseg_plugin_writer), ".nrrd", "float NRRD volume with spacing and origin", write_nrrd_map, nullptr},
+  };
+  for (const auto& x : readers)
+    if (int rc = host->register_reader(r, &x)) return rc;
+  for (const auto& x : writers)
+    if (int rc = host->register_writer(r, &x)) return rc;
+  return 0;
+}
+
+const occseg_plugin_descriptor kBuiltinIo = {
+    OCCSEG_PLUGIN_ABI_MAJOR, OCCSEG_PLUGIN_ABI_MINOR, sizeof(occseg_plugin_descriptor), "builtin_io",
+    OCCSEG_VERSION_STRING, "built-in map readers and writers (.npy, .nrrd)", register_io};
+
+// Registered when the binary holding this object is loaded (before main / dlopen returns).
+[[maybe_unused]] const bool kRegistered = (occseg::register_static_plugin(&kBuiltinIo), true);
+
+}  // namespace

@@ -1,0 +1,199 @@
+// occseg_plugin*, occseg_stage*, occseg_param_plugin/_default and the extension-dispatching map
+// readers and writers: the C face of the registry (occseg/registry.hpp).
+#include <cstring>
+#include <memory>
+
+#include "internal.hpp"
+#include "occseg/registry.hpp"
+
+using occseg::Error;
+using occseg::Status;
+using occseg::capi::guard;
+using occseg::capi::require;
+
+namespace {
+
+// snprintf-like copy (see occseg_params_get in occseg.h).
+void copy_text(const std::string& text, char* buf, std::size_t size, std::size_t* length) {
+  if (length) *length = text.size();
+  if (!buf && size == 0) {
+    require(length, "length");
+    return;
+  }
+  require(buf, "buf");
+  if (size < text.size() + 1)
+    throw Error(Status::out_of_range, "buffer of " + std::to_string(size) + " bytes is too small for '" + text +
+                                          "' (needs " + std::to_string(text.size() + 1) + ")");
+  std::memcpy(buf, text.c_str(), text.size() + 1);
+}
+
+const occseg::PluginInfo* plugin_at(uint32_t index) {
+  const auto v = occseg::loaded_plugins();
+  return index < v.size() ? v[index] : nullptr;
+}
+
+struct StageText {
+  const char* name;
+  const char* description;
+  const char* plugin;
+};
+
+template <class T>
+bool pick(const std::vector<const T*>& v, uint32_t index, const std::string T::*key, StageText& out) {
+  if (index >= v.size()) return false;
+  out = {(v[index]->*key).c_str(), v[index]->description.c_str(), v[index]->plugin.c_str()};
+  return true;
+}
+
+// Entries are never removed, so the strings stay valid after the snapshot is gone.
+bool stage_at(int kind, uint32_t index, StageText& out) {
+  switch (kind) {
+    case OCCSEG_STAGE_TEXTURE: return pick(occseg::texture_operators(), index, &occseg::TextureOperator::name, out);
+    case OCCSEG_STAGE_SIMILARITY: return pick(occseg::similarities(), index, &occseg::Similarity::name, out);
+    case OCCSEG_STAGE_READER: return pick(occseg::map_readers(), index, &occseg::MapReader::extension, out);
+    case OCCSEG_STAGE_WRITER: return pick(occseg::map_writers(), index, &occseg::MapWriter::extension, out);
+    default: return false;
+  }
+}
+
+std::vector<std::string> option_list(const char* const* options) {
+  std::vector<std::string> v;
+  for (const char* const* o = options; o && *o; ++o) v.emplace_back(*o);
+  return v;
+}
+
+}  // namespace
+
+extern "C" {
+
+int occseg_plugins_load(const char* path) {
+  return guard("occseg_plugins_load", [&] {
+    require(path, "path");
+    occseg::load_plugin(path);
+  });
+}
+
+int occseg_plugins_load_default(uint32_t* loaded) {
+  return guard("occseg_plugins_load_default", [&] {
+    if (loaded) *loaded = 0;
+    const occseg::PluginLoadReport r = occseg::load_default_plugins();
+    if (loaded) *loaded = static_cast<uint32_t>(r.loaded.size());
+    if (!r.errors.empty()) {
+      std::string all;
+      for (const auto& e : r.errors) all += (all.empty() ? "" : "; ") + e;
+      throw Error(Status::plugin, all);
+    }
+  });
+}
+
+int occseg_plugin_search_path(char* buf, size_t size, size_t* length) {
+  return guard("occseg_plugin_search_path", [&] {
+    std::string s;
+    for (const auto& d : occseg::plugin_search_path()) s += (s.empty() ? "" : ":") + d;
+    copy_text(s, buf, size, length);
+  });
+}
+
+uint32_t occseg_plugin_count(void) { return static_cast<uint32_t>(occseg::loaded_plugins().size()); }
+
+const char* occseg_plugin_name(uint32_t index) {
+  const auto* p = plugin_at(index);
+  return p ? p->name.c_str() : nullptr;
+}
+
+const char* occseg_plugin_version(uint32_t index) {
+  const auto* p = plugin_at(index);
+  return p ? p->version.c_str() : nullptr;
+}
+
+const char* occseg_plugin_description(uint32_t index) {
+  const auto* p = plugin_at(index);
+  return p ? p->description.c_str() : nullptr;
+}
+
+const char* occseg_plugin_path(uint32_t index) {
+  const auto* p = plugin_at(index);
+  return p ? p->path.c_str() : nullptr;
+}
+
+int occseg_plugin_abi(uint32_t index, uint32_t* major, uint32_t* minor) {
+  return guard("occseg_plugin_abi", [&] {
+    require(major, "major");
+    require(minor, "minor");
+    const auto* p = plugin_at(index);
+    if (!p)
+      throw Error(Status::out_of_range, "index " + std::to_string(index) + " is out of range (there are " +
+                                            std::to_string(occseg_plugin_count()) + " plugins)");
+    *major = p->abi_major;
+    *minor = p->abi_minor;
+  });
+}
+
+void occseg_plugin_host_abi(uint32_t* major, uint32_t* minor) {
+  if (major) *major = OCCSEG_PLUGIN_ABI_MAJOR;
+  if (minor) *minor = OCCSEG_PLUGIN_ABI_MINOR;
+}
+
+uint32_t occseg_stage_count(occseg_stage_kind kind) {
+  switch (kind) {
+    case OCCSEG_STAGE_TEXTURE: return static_cast<uint32_t>(occseg::texture_operators().size());
+    case OCCSEG_STAGE_SIMILARITY: return static_cast<uint32_t>(occseg::similarities().size());
+    case OCCSEG_STAGE_READER: return static_cast<uint32_t>(occseg::map_readers().size());
+    case OCCSEG_STAGE_WRITER: return static_cast<uint32_t>(occseg::map_writers().size());
+    default: return 0;
+  }
+}
+
+const char* occseg_stage_name(occseg_stage_kind kind, uint32_t index) {
+  StageText t{};
+  return stage_at(kind, index, t) ? t.name : nullptr;
+}
+
+const char* occseg_stage_description(occseg_stage_kind kind, uint32_t index) {
+  StageText t{};
+  return stage_at(kind, index, t) ? t.description : nullptr;
+}
+
+const char* occseg_stage_plugin(occseg_stage_kind kind, uint32_t index) {
+  StageText t{};
+  return stage_at(kind, index, t) ? t.plugin : nullptr;
+}
+
+const char* occseg_param_plugin(uint32_t index) {
+  const auto& builtin = occseg::param_table();
+  if (index < builtin.size()) return occseg::kBuiltinPlugin;
+  const auto declared = occseg::plugin_params();
+  index -= static_cast<uint32_t>(builtin.size());
+  return index < declared.size() ? declared[index]->plugin.c_str() : nullptr;
+}
+
+int occseg_param_default(uint32_t index, char* buf, size_t size, size_t* length) {
+  return guard("occseg_param_default", [&] {
+    const auto all = occseg::all_params();
+    if (index >= all.size())
+      throw Error(Status::out_of_range, "index " + std::to_string(index) + " is out of range (there are " +
+                                            std::to_string(all.size()) + " parameters)");
+    copy_text(occseg::param_default(all[index].name), buf, size, length);
+  });
+}
+
+int occseg_map_read_options(occseg_map** out, const char* path, const char* const* options) {
+  return guard("occseg_map_read", [&] {
+    require(out, "out");
+    *out = nullptr;
+    require(path, "path");
+    auto m = std::make_unique<occseg_map>();
+    m->grid = occseg::read_map(path, option_list(options));
+    *out = m.release();
+  });
+}
+
+int occseg_map_write_options(const occseg_map* map, const char* path, const char* const* options) {
+  return guard("occseg_map_write", [&] {
+    require(map, "map");
+    require(path, "path");
+    occseg::write_map(path, map->grid, option_list(options));
+  });
+}
+
+}  // extern "C"

@@ -1,0 +1,126 @@
+// The process-wide registry of pipeline stages (texture operators, histogram similarities), map
+// readers and writers, and plugin-declared parameters, filled by the built-in stages and by
+// plugins (occseg/occseg_plugin.h) through one interface.
+//
+// Thread safety: every function here may be called from any thread. Registration (loading a
+// plugin) is serialised and transactional: a plugin's entries become visible all at once when
+// its register function has succeeded, or not at all. Entries are never removed or changed once
+// visible, so the pointers returned by the find_* functions stay valid for the life of the
+// process and may be used while other threads load plugins.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "occseg/grid.hpp"
+#include "occseg/occseg_plugin.h"
+#include "occseg/params.hpp"
+#include "occseg/texture.hpp"
+
+namespace occseg {
+
+// Name of the plugin that owns the built-in stages and parameters.
+constexpr const char* kBuiltinPlugin = "builtin";
+
+struct TextureOperator {
+  std::string name, description, plugin;
+  occseg_plugin_texture_fn compute = nullptr;
+  void* user = nullptr;
+  // Built-in operators only: a direct C++ implementation the pipeline prefers (no copy).
+  TextureMap (*native)(const Grid& grid, const Params& params) = nullptr;
+};
+
+struct Similarity {
+  std::string name, description, plugin;
+  occseg_plugin_similarity_fn compare = nullptr;
+  void* user = nullptr;
+};
+
+struct MapReader {
+  std::string extension, description, plugin;  // extension: lower case, with the dot
+  occseg_plugin_read_fn read = nullptr;
+  void* user = nullptr;
+};
+
+struct MapWriter {
+  std::string extension, description, plugin;
+  occseg_plugin_write_fn write = nullptr;
+  void* user = nullptr;
+};
+
+struct PluginParam {
+  std::string name, kind, default_value, description, plugin;  // kind: "int", "double", "string"
+  double min = 0, max = 0;
+  ParamInfo info{};  // the same, pointing into this entry (set when it is registered)
+};
+
+struct PluginInfo {
+  std::string name, version, description, path;  // path: "" for built-ins
+  std::uint32_t abi_major = 0, abi_minor = 0;
+  std::vector<std::string> textures, similarities, readers, writers, params;
+};
+
+// Lookups; nullptr when nothing of that name (extension) is registered.
+const TextureOperator* find_texture(const std::string& name);
+const Similarity* find_similarity(const std::string& name);
+const MapReader* find_reader(const std::string& extension);
+const MapWriter* find_writer(const std::string& extension);
+const PluginParam* find_plugin_param(const std::string& name);
+
+// Snapshots, in registration order.
+std::vector<const PluginInfo*> loaded_plugins();
+std::vector<const TextureOperator*> texture_operators();
+std::vector<const Similarity*> similarities();
+std::vector<const MapReader*> map_readers();
+std::vector<const MapWriter*> map_writers();
+std::vector<const PluginParam*> plugin_params();
+
+// "a, b, c": the registered names of one kind, for error messages.
+std::string texture_names();
+std::string similarity_names();
+
+// Registers a plugin compiled into the program (the built-in stages, the built-in .npy/.nrrd
+// readers). Throws Error(plugin) like load_plugin.
+void register_static_plugin(const occseg_plugin_descriptor* descriptor);
+
+// Loads one plugin file (dlopen, entry point, ABI check, register function). Throws
+// Error(plugin) "plugin '<path>': <reason>" and leaves the registry unchanged on any failure.
+// Returns the plugin's name.
+std::string load_plugin(const std::string& path);
+
+// The folders load_default_plugins() searches, in order: each entry of OCCSEG_PLUGIN_PATH
+// (colon-separated), then the install's plugin folder (<libdir>/occseg/plugins, found relative
+// to the running binary for relocated installs, then at its configured location).
+std::vector<std::string> plugin_search_path();
+
+struct PluginLoadReport {
+  std::vector<std::string> loaded;   // names of the plugins loaded now
+  std::vector<std::string> skipped;  // files whose plugin name was already loaded (first wins)
+  std::vector<std::string> errors;   // one message per file that failed
+};
+// Loads every "*.so" file of the search path, in folder order then name order. A plugin whose
+// name is already loaded (earlier in the path, or before) is skipped; a failing file does not
+// stop the others.
+PluginLoadReport load_default_plugins();
+
+// The texture stage: runs the operator params.texture. Throws Error(invalid_argument) for an
+// unknown name and Error(plugin) when an operator fails or returns invalid codes.
+TextureMap run_texture(const Grid& grid, const Params& params);
+
+// The similarity params.similarity for the division, or nullptr for "g" (the division's own
+// optimised G-statistic). Throws Error(invalid_argument) for an unknown name.
+const Similarity* division_similarity(const Params& params);
+
+// Calls a similarity; throws Error(plugin) for a NaN or negative result.
+double compare_histograms(const Similarity& s, const std::uint32_t* a, const std::uint32_t* b, std::size_t bins);
+
+// Reads a map with the reader registered for the file's extension (options: "key=value").
+// Throws Error(unsupported) naming the extension when no reader has it.
+Grid read_map(const std::string& path, const std::vector<std::string>& options = {});
+// Writes a map with the writer registered for the file's extension.
+void write_map(const std::string& path, const Grid& grid, const std::vector<std::string>& options = {});
+
+// The lower-case last extension of a path, with its dot ("" when there is none).
+std::string file_extension(const std::string& path);
+
+}  // namespace occseg

@@ -1,0 +1,47 @@
+// Shared by registry.cpp, plugin_loader.cpp, stages.cpp, builtin_stages.cpp and params.cpp:
+// the pieces of the registry that are not public API.
+#pragma once
+#include <string>
+
+#include "occseg/occseg_plugin.h"
+#include "occseg/params.hpp"
+#include "occseg/registry.hpp"
+
+namespace occseg {
+
+// Validates a descriptor, runs its register function with a fresh registrar and commits what it
+// registered, all under the loading lock. `path` is "" for plugins compiled into the program.
+// Throws Error(plugin) naming the plugin and the reason; then nothing was committed. Returns the
+// plugin's name.
+std::string install_descriptor(const occseg_plugin_descriptor* descriptor, const std::string& path, void* handle);
+
+// True when a plugin of that name is registered.
+bool plugin_loaded(const std::string& name);
+
+// The table handed to every register function and callback.
+const occseg_plugin_host& host_table();
+
+// The calling thread's plugin error text (host->set_error).
+void set_plugin_error(const std::string& message);
+void clear_plugin_error();
+std::string plugin_error();  // "(no message)" when none was set
+
+// Host functions implemented in stages.cpp.
+int host_param_get_int(const occseg_plugin_call* call, const char* name, int64_t* out);
+int host_param_get_double(const occseg_plugin_call* call, const char* name, double* out);
+int host_param_get_string(const occseg_plugin_call* call, const char* name, char* buf, size_t size);
+int host_map_alloc(occseg_plugin_map_sink* sink, const size_t dims[3], double voxel_size, const double origin[3],
+                   float** values);
+int host_contrast_levels(const double* contrast, size_t count, uint32_t bins, uint16_t* levels);
+
+// builtin_stages.cpp: the built-in stages as a plugin descriptor, and their C++ fast paths,
+// attached after the descriptor is installed.
+const occseg_plugin_descriptor* builtin_stages_descriptor();
+void attach_builtin_natives();
+void set_native_texture(const std::string& name, TextureMap (*native)(const Grid&, const Params&));
+
+// params.cpp: parses `text` as a value of the parameter `info` (number kinds: a finite number
+// within the bounds, integral for "int"); throws Error(invalid_argument) naming it otherwise.
+double check_param_value(const ParamInfo& info, const std::string& text);
+
+}  // namespace occseg
