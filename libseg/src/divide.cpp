@@ -4,10 +4,13 @@
 #include <cmath>
 #include <limits>
 
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
 #include "occseg/error.hpp"
 #include "occseg/histogram.hpp"
 #include "occseg/parallel.hpp"
-#include "occseg/registry.hpp"
 
 namespace occseg {
 
@@ -60,6 +63,26 @@ struct Child {
   double cells = 0;
 };
 
+// Bit k set when counts[k] != 0, for 64 counts.
+inline std::uint64_t nonzero_mask(const std::uint32_t* counts) {
+  std::uint64_t m = 0;
+#ifdef __SSE2__
+  const __m128i zero = _mm_setzero_si128();
+  for (int k = 0; k < 64; k += 16) {
+    const __m128i* c = reinterpret_cast<const __m128i*>(counts + k);
+    const __m128i a = _mm_packs_epi32(_mm_cmpeq_epi32(_mm_loadu_si128(c), zero),
+                                      _mm_cmpeq_epi32(_mm_loadu_si128(c + 1), zero));
+    const __m128i b = _mm_packs_epi32(_mm_cmpeq_epi32(_mm_loadu_si128(c + 2), zero),
+                                      _mm_cmpeq_epi32(_mm_loadu_si128(c + 3), zero));
+    const auto zeros = static_cast<unsigned>(_mm_movemask_epi8(_mm_packs_epi16(a, b)));
+    m |= static_cast<std::uint64_t>(~zeros & 0xFFFFu) << k;
+  }
+#else
+  for (int k = 0; k < 64; ++k) m |= static_cast<std::uint64_t>(counts[k] != 0) << k;
+#endif
+  return m;
+}
+
 // Per-thread scratch for the children of one block (reused for every block the thread handles).
 struct Scratch {
   std::vector<std::uint32_t> hist;
@@ -74,7 +97,6 @@ struct Divider {
   const XLogX& xl;
   std::size_t bins;
   std::size_t words;  // 64-bit words of a bin mask
-  const Similarity* sim;  // params.similarity, or nullptr for the G-statistic computed here
 
   void histogram(const Block& b, Child& c) const {
     std::uint32_t* h = c.h;
@@ -89,8 +111,7 @@ struct Divider {
     c.n = 0;
     c.cells = 0;
     for (std::size_t w = 0; w < words; ++w) {
-      std::uint64_t m = 0;
-      for (std::size_t k = 0; k < 64; ++k) m |= static_cast<std::uint64_t>(h[w * 64 + k] != 0) << k;
+      const std::uint64_t m = nonzero_mask(h + w * 64);
       c.nz[w] = m;
       for (std::uint64_t u = m; u; u &= u - 1) {
         const std::uint32_t f = h[w * 64 + static_cast<std::size_t>(__builtin_ctzll(u))];
@@ -122,7 +143,7 @@ struct Divider {
     double gmax = 0, gmin = std::numeric_limits<double>::infinity();
     for (std::size_t a = 0; a < n; ++a)
       for (std::size_t b = a + 1; b < n; ++b) {
-        const double v = sim ? compare_histograms(*sim, used[a]->h, used[b]->h, bins) : g(*used[a], *used[b]);
+        const double v = g(*used[a], *used[b]);
         gmax = std::max(gmax, v);
         gmin = std::min(gmin, v);
       }
@@ -185,7 +206,7 @@ std::vector<Block> divide(const Grid& grid, const TextureMap& tex, const Params&
   const std::size_t tops = t[0] * t[1] * t[2];
   std::vector<std::vector<Block>> per_top(tops);
   const std::size_t bins = static_cast<std::size_t>(tex.code_count());
-  const Divider d{grid, tex, params, xlogx_table(), bins, (bins + 63) / 64, division_similarity(params)};
+  const Divider d{grid, tex, params, xlogx_table(), bins, (bins + 63) / 64};
   // Finer chunks than threads: top blocks differ a lot in cost (uniform ones never split).
   const std::size_t chunks = std::min<std::size_t>(tops, 64);
   parallel_for(chunks, params.threads, [&](std::size_t c0, std::size_t c1) {
