@@ -11,6 +11,7 @@
 #include "occseg/error.hpp"
 #include "occseg/histogram.hpp"
 #include "occseg/parallel.hpp"
+#include "occseg/registry.hpp"
 
 namespace occseg {
 
@@ -97,6 +98,7 @@ struct Divider {
   const XLogX& xl;
   std::size_t bins;
   std::size_t words;  // 64-bit words of a bin mask
+  const Similarity* sim;  // params.similarity, or nullptr for the G-statistic computed here
 
   void histogram(const Block& b, Child& c) const {
     std::uint32_t* h = c.h;
@@ -143,7 +145,7 @@ struct Divider {
     double gmax = 0, gmin = std::numeric_limits<double>::infinity();
     for (std::size_t a = 0; a < n; ++a)
       for (std::size_t b = a + 1; b < n; ++b) {
-        const double v = g(*used[a], *used[b]);
+        const double v = sim ? compare_histograms(*sim, used[a]->h, used[b]->h, bins) : g(*used[a], *used[b]);
         gmax = std::max(gmax, v);
         gmin = std::min(gmin, v);
       }
@@ -206,7 +208,7 @@ std::vector<Block> divide(const Grid& grid, const TextureMap& tex, const Params&
   const std::size_t tops = t[0] * t[1] * t[2];
   std::vector<std::vector<Block>> per_top(tops);
   const std::size_t bins = static_cast<std::size_t>(tex.code_count());
-  const Divider d{grid, tex, params, xlogx_table(), bins, (bins + 63) / 64};
+  const Divider d{grid, tex, params, xlogx_table(), bins, (bins + 63) / 64, division_similarity(params)};
   // Finer chunks than threads: top blocks differ a lot in cost (uniform ones never split).
   const std::size_t chunks = std::min<std::size_t>(tops, 64);
   parallel_for(chunks, params.threads, [&](std::size_t c0, std::size_t c1) {
