@@ -21,7 +21,7 @@ def test_loop_of_1000_segmentations_leaves_no_handle():
     for i in range(1000):
         r = occseg.segment(m, threads=1)  # the previous result is dropped here, never closed
         assert len(r.segments) == 2
-    assert occseg.live_handles() == {"result": before.get("result", 0) + 1}
+    assert occseg.live_handles() == dict(before, result=before.get("result", 0) + 1)
     del r
     assert occseg.live_handles() == before
 
