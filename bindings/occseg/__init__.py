@@ -9,8 +9,6 @@ liboccseg.so.0 serves. See docs/python.md.
         for s in r.segments:
             print(s.id, s.state.name, s.voxels)
 """
-import os as _os
-
 from . import _lib
 from ._errors import OccsegError, Status
 from ._handles import live_handles
@@ -38,14 +36,12 @@ def library_path():
     return _lib.path
 
 
-# Plugin loading exists from the library version that adds occseg_plugins_load to the C ABI;
-# with an older library, occseg has no load_plugin (test with hasattr(occseg, "load_plugin")).
-if hasattr(_lib.lib, "occseg_plugins_load"):
-    from ._errors import check as _check
+# The plugin interface exists from the library version that added occseg_plugins_load and its
+# companions to the C ABI. With an older library these names are absent from the package: test
+# with hasattr(occseg, "load_plugin").
+if _lib.has("occseg_plugins_load") and _lib.has("occseg_plugin_count") and _lib.has("occseg_stage_count"):
+    from ._plugins import (PluginInfo, StageInfo, load_default_plugins, load_plugin, plugin_search_path,  # noqa: F401
+                           plugins, stages)
 
-    def load_plugin(path):
-        """Loads one plugin file (occseg_plugins_load): its texture operators, similarity
-        measures, map readers and parameters become available to segment() and read_map()."""
-        _check(_lib.lib.occseg_plugins_load(_os.fsencode(path)))
-
-    __all__.append("load_plugin")
+    __all__ += ["load_plugin", "load_default_plugins", "plugin_search_path", "plugins", "stages", "PluginInfo",
+                "StageInfo"]

@@ -86,10 +86,34 @@ PROTOTYPES = {
     "occseg_result_write": (_I, [_P, _S]),
 }
 
-# Functions of later library versions, declared only when the loaded library has them.
+# Functions of later library versions (the plugin interface), declared only when the loaded
+# library has them; the package offers what they back only then.
+_U32 = ctypes.c_uint32
+_PU32 = ctypes.POINTER(_U32)
 OPTIONAL_PROTOTYPES = {
-    "occseg_plugins_load": (_I, [_S]),  # int occseg_plugins_load(const char *path)
+    "occseg_plugins_load": (_I, [_S]),
+    "occseg_plugins_load_default": (_I, [_PU32]),
+    "occseg_plugin_search_path": (_I, [ctypes.c_char_p, ctypes.c_size_t, ctypes.POINTER(ctypes.c_size_t)]),
+    "occseg_plugin_count": (_U32, []),
+    "occseg_plugin_name": (_S, [_U32]),
+    "occseg_plugin_version": (_S, [_U32]),
+    "occseg_plugin_description": (_S, [_U32]),
+    "occseg_plugin_path": (_S, [_U32]),
+    "occseg_plugin_abi": (_I, [_U32, _PU32, _PU32]),
+    "occseg_stage_count": (_U32, [_I]),
+    "occseg_stage_name": (_S, [_I, _U32]),
+    "occseg_stage_description": (_S, [_I, _U32]),
+    "occseg_stage_plugin": (_S, [_I, _U32]),
+    "occseg_param_plugin": (_S, [_U32]),
+    "occseg_param_default": (_I, [_U32, ctypes.c_char_p, ctypes.c_size_t, ctypes.POINTER(ctypes.c_size_t)]),
+    "occseg_map_read_options": (_I, [ctypes.POINTER(_P), _S, ctypes.POINTER(_S)]),
+    "occseg_map_write_options": (_I, [_P, _S, ctypes.POINTER(_S)]),
 }
+
+
+def has(name):
+    """True when the loaded library exports the optional function `name`."""
+    return hasattr(lib, name)
 
 
 def _package_candidates():

@@ -6,7 +6,8 @@ import numpy as np
 
 from ._errors import OccsegError, Status, check
 from ._handles import own
-from ._lib import c_double3, c_ptrdiff3, c_size3, lib
+from ._lib import c_double3, c_ptrdiff3, c_size3, has, lib
+from ._text import option_array
 
 # occseg_dtype of each accepted element type (native byte order).
 _DTYPES = {np.dtype(np.float32): 0, np.dtype(np.float64): 1, np.dtype(np.uint8): 2, np.dtype(np.uint16): 3}
@@ -129,9 +130,17 @@ class Map:
         check(lib.occseg_map_values(self.handle, out.ctypes.data, out.size))
         return out
 
-    def write(self, path):
-        """Writes the probabilities as a float32 .npy file [z, y, x]; all or nothing."""
-        check(lib.occseg_map_write(self.handle, os.fsencode(path)))
+    def write(self, path, **options):
+        """Writes the map with the library's writer for the path's extension (.npy: float32
+        [z, y, x]; .nrrd: with voxel size and origin; more from plugins); keywords become writer
+        options "key=value". All or nothing."""
+        if has("occseg_map_write_options"):
+            check(lib.occseg_map_write_options(self.handle, os.fsencode(path), option_array("occseg_map_write", options)))
+        elif options:
+            raise OccsegError(Status.EUNSUPPORTED, "occseg_map_write: options need a liboccseg with "
+                                                   "occseg_map_write_options")
+        else:
+            check(lib.occseg_map_write(self.handle, os.fsencode(path)))
 
     def segment(self, preset="default", threads=0, **kwargs):
         """Same as occseg.segment(self, ...)."""
@@ -144,13 +153,23 @@ class Map:
         return f"<occseg.Map dims={self.dims} voxel_size={self.voxel_size:g} origin={self.origin}>"
 
 
-def read_map(path, voxel_size=None, origin=None):
-    """Reads a map through the library's readers (occseg_map_read): a .npy file (float32, float64,
-    uint8 or uint16, [z, y, x] or [y, x]), plus whatever formats the loaded library or its plugins
-    add; the extension decides. `voxel_size` and `origin` override what the file gives."""
+def read_map(path, **options):
+    """Reads a map through the library's readers (occseg_map_read_options): the extension picks
+    the reader (.npy and .nrrd built in, more from plugins), and each keyword becomes a reader
+    option "key=value" (e.g. voxel_size=0.05 for .npy; a reader refuses keys it does not know).
+    A library older than the plugin interface reads .npy only, and takes voxel_size only."""
     out = ctypes.c_void_p()
-    check(lib.occseg_map_read(ctypes.byref(out), os.fsencode(path)))
-    return _configured(Map(out), voxel_size, origin)
+    p = os.fsencode(path)
+    if has("occseg_map_read_options"):
+        check(lib.occseg_map_read_options(ctypes.byref(out), p, option_array("occseg_map_read", options)))
+        return Map(out)
+    options = dict(options)
+    voxel_size = options.pop("voxel_size", None)
+    if options:
+        raise OccsegError(Status.EUNSUPPORTED, f"occseg_map_read: options {sorted(options)} need a liboccseg "
+                                               "with occseg_map_read_options")
+    check(lib.occseg_map_read(ctypes.byref(out), p))
+    return _configured(Map(out), voxel_size, None)
 
 
 def _configured(m, voxel_size, origin):

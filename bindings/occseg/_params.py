@@ -4,7 +4,8 @@ import dataclasses
 import numbers
 
 from ._errors import OccsegError, Status, check
-from ._lib import lib
+from ._lib import has, lib
+from ._text import get_text
 
 
 @dataclasses.dataclass(frozen=True)
@@ -16,6 +17,8 @@ class ParamInfo:
     description: str
     min: float  # inclusive bounds (0, 0 for "string" parameters)
     max: float
+    default: str = None  # as text; None with a library older than the plugin interface
+    plugin: str = None  # "builtin" or the plugin that declared it; None likewise
 
 
 def param_table():
@@ -24,8 +27,11 @@ def param_table():
     for i in range(lib.occseg_param_count()):
         lo, hi = ctypes.c_double(), ctypes.c_double()
         check(lib.occseg_param_bounds(i, ctypes.byref(lo), ctypes.byref(hi)))
+        extra = {}
+        if has("occseg_param_default") and has("occseg_param_plugin"):
+            extra = {"default": get_text(lib.occseg_param_default, i), "plugin": lib.occseg_param_plugin(i).decode()}
         rows.append(ParamInfo(lib.occseg_param_name(i).decode(), lib.occseg_param_kind(i).decode(),
-                              lib.occseg_param_description(i).decode(), lo.value, hi.value))
+                              lib.occseg_param_description(i).decode(), lo.value, hi.value, **extra))
     return rows
 
 
@@ -42,12 +48,3 @@ def set_param(handle, name, value):
         check(lib.occseg_params_set_int(handle, key, int(value)))
     else:
         check(lib.occseg_params_set_double(handle, key, float(value)))
-
-
-def get_param(handle, name):
-    """Any parameter's value as the text occseg_params_set accepts."""
-    n = ctypes.c_size_t()
-    check(lib.occseg_params_get(handle, name.encode(), None, 0, ctypes.byref(n)))
-    buf = ctypes.create_string_buffer(n.value + 1)
-    check(lib.occseg_params_get(handle, name.encode(), buf, len(buf), None))
-    return buf.value.decode()

@@ -50,6 +50,10 @@ def test_corridor_matches_the_tool(corridor):
     assert not grid.flags.writeable  # the file's bytes, read in place (possibly misaligned)
     ref = json.loads((corridor / "segments.json").read_text())
     ref_labels = np.load(corridor / "labels.npy")
+    if hasattr(occseg, "stages") and ".nrrd" in {s.name for s in occseg.stages("reader")}:
+        with occseg.read_map(corridor / "map.nrrd") as m:  # the library's own NRRD reader agrees
+            assert m.voxel_size == voxel_size and np.allclose(m.origin, origin, rtol=0, atol=1e-12)
+            assert np.array_equal(m.to_array(), grid)
     with occseg.segment(grid, voxel_size=voxel_size, origin=origin) as r:
         assert np.array_equal(r.labels, ref_labels)
         assert as_json_rows(r.segments) == ref["segments"]
