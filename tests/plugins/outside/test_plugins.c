@@ -294,8 +294,9 @@ static void octomap(const char *bt) {
   CHECK(m && occseg_map_dims(m, dims) == OCCSEG_OK);
   CHECK(m && occseg_map_origin(m, o) == OCCSEG_OK);
   /* Occupied extent about x -8..31 m, y -7.5..7.4 m, z -0.3..2.8 m (data README): the grid spans it. */
-  CHECK(m && o[0] <= -8 && o[0] + dims[0] * vs >= 31 && o[1] <= -7.5 && o[1] + dims[1] * vs >= 7.4);
-  CHECK(m && o[2] <= -0.3 && o[2] + dims[2] * vs >= 2.8);
+  CHECK(m && o[0] < -7.9 && o[0] + dims[0] * vs > 30.9 && o[1] < -7.4 && o[1] + dims[1] * vs > 7.3);
+  CHECK(m && o[2] < -0.2 && o[2] + dims[2] * vs > 2.7);
+  CHECK(m && dims[0] < 520 && dims[1] < 200 && dims[2] < 45); /* and not much more */
   printf("geb079.bt: %zu x %zu x %zu voxels of %.3f m, origin (%.2f, %.2f, %.2f)\n", dims[0], dims[1], dims[2], vs, o[0],
          o[1], o[2]);
   {
