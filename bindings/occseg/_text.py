@@ -14,21 +14,28 @@ def get_text(fn, *args):
     return buf.value.decode()
 
 
+def _number(who, key, value):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise OccsegError(Status.EINVAL, f"{who}: option '{key}': {value!r} ({type(value).__name__}) "
+                                         "is not a number, text or sequence of numbers")
+    if isinstance(value, numbers.Integral):
+        return str(int(value))
+    return repr(float(value))  # shortest text that reads back as the same double
+
+
 def option_array(who, options):
-    """A NULL-terminated const char *[] of "key=value" texts (or None for no options). Values may
-    be text or numbers (floats in their shortest exact form); anything else is refused."""
+    """A NULL-terminated const char *[] of "key=value" texts (or None for no options). A value is
+    text, a number (floats in their shortest exact form) or a sequence of numbers, joined by
+    commas as the library's readers expect (bbox=(x0, y0, z0, x1, y1, z1))."""
     if not options:
         return None
     texts = []
     for key, value in options.items():
-        if isinstance(value, bool) or not isinstance(value, (str, numbers.Real)):
-            raise OccsegError(Status.EINVAL, f"{who}: option '{key}': {value!r} ({type(value).__name__}) "
-                                             "is not a number or text")
         if isinstance(value, str):
             text = value
-        elif isinstance(value, numbers.Integral):
-            text = str(int(value))
+        elif isinstance(value, (list, tuple)) or (hasattr(value, "ndim") and getattr(value, "ndim") == 1):
+            text = ",".join(_number(who, key, v) for v in value)
         else:
-            text = repr(float(value))  # shortest text that reads back as the same double
+            text = _number(who, key, value)
         texts.append(f"{key}={text}".encode())
     return (ctypes.c_char_p * (len(texts) + 1))(*texts, None)

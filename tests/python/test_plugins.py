@@ -56,8 +56,11 @@ def test_reader_options(tmp_path):
         occseg.read_map(tmp_path / "m.npy", colour="red")
     assert e.value.status == Status.EINVAL and "colour=red" in e.value.message
     with pytest.raises(OccsegError) as e:
-        occseg.read_map(tmp_path / "m.npy", voxel_size=[1])
-    assert e.value.status == Status.EINVAL and "voxel_size" in e.value.message
+        occseg.read_map(tmp_path / "m.npy", voxel_size=None)
+    assert e.value.status == Status.EINVAL and "'voxel_size': None" in e.value.message
+    from occseg._text import option_array
+    texts = option_array("t", {"a": "x", "b": 3, "c": 0.1, "bbox": (-8, 0.5, np.float32(0.25)), "e": np.array([1, 2])})
+    assert [texts[i] for i in range(6)] == [b"a=x", b"b=3", b"c=0.1", b"bbox=-8,0.5,0.25", b"e=1,2", None]
     with pytest.raises(OccsegError) as e:
         occseg.read_map(tmp_path / "m.xyz")
     assert e.value.status == Status.EUNSUPPORTED and "'.xyz'" in e.value.message

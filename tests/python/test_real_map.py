@@ -1,7 +1,8 @@
 """A real map: the OctoMap corridor geb079.bt (../shared/data, 487 x 187 x 39 voxels of 8 cm),
 turned into a grid by `occseg segment` (which writes it as map.nrrd next to its labels). The
 bindings, fed that grid straight from the file's bytes, must reproduce the tool's segmentation.
-Needs a build with OctoMap; skipped (with the reason) otherwise."""
+Needs a build with OctoMap (and, for the .bt read by occseg.read_map, its reader plugin);
+skipped with the reason otherwise."""
 import json
 import os
 import re
@@ -17,8 +18,8 @@ DATA = os.environ.get("OCCSEG_SHARED_DATA", os.path.join(os.path.dirname(__file_
 
 
 def read_nrrd(path):
-    """(float32 [z, y, x] array viewing the file's bytes in place, voxel size, origin) of the raw,
-    little-endian, axis-aligned NRRD the tool writes."""
+    """(float32 [z, y, x] array viewing the file's bytes in place, voxel size, origin corner) of
+    the raw, little-endian, axis-aligned NRRD the tool writes."""
     raw = open(path, "rb").read()
     head, _, _ = raw.partition(b"\n\n")
     fields = dict(line.split(": ", 1) for line in head.decode().splitlines()[1:] if ": " in line)
@@ -26,7 +27,8 @@ def read_nrrd(path):
     nx, ny, nz = map(int, fields["sizes"].split())
     steps = [float(v) for v in re.findall(r"[-0-9.e]+", fields["space directions"])]
     assert steps[0] == steps[4] == steps[8]
-    origin = tuple(float(v) for v in re.findall(r"[-0-9.e]+", fields["space origin"]))
+    # NRRD's space origin is the centre of the first voxel; occseg's origin is its outer corner
+    origin = tuple(float(v) - steps[0] / 2 for v in re.findall(r"[-0-9.e]+", fields["space origin"]))
     data = np.frombuffer(raw, dtype="<f4", offset=len(head) + 2, count=nx * ny * nz).reshape(nz, ny, nx)
     return data, steps[0], origin
 
@@ -65,3 +67,23 @@ def test_corridor_matches_the_tool(corridor):
         lo = np.array(origin)
         hi = lo + np.array([487, 187, 39]) * voxel_size
         assert np.all(p > lo) and np.all(p < hi)
+
+
+def test_corridor_through_the_octomap_reader_plugin(corridor, monkeypatch):
+    """The .bt file itself, read by the OctoMap reader plugin (built with OctoMap): the same grid
+    as the tool's, the same segmentation; reader options pass through (a coarser voxel size)."""
+    plugin_dir = os.environ.get("OCCSEG_READER_PLUGINS")
+    if not plugin_dir:
+        pytest.skip("no OctoMap reader plugin in this build")
+    monkeypatch.setenv("OCCSEG_PLUGIN_PATH", plugin_dir)  # read by the library at the call
+    assert occseg.load_default_plugins() >= 1
+    assert ".bt" in {s.name for s in occseg.stages("reader")}
+    grid, voxel_size, origin = read_nrrd(corridor / "map.nrrd")
+    bt = os.path.join(DATA, "geb079.bt")
+    with occseg.read_map(bt) as m:
+        assert m.voxel_size == voxel_size and np.allclose(m.origin, origin, rtol=0, atol=1e-12)
+        assert np.array_equal(m.to_array(), grid)
+        with m.segment() as r:
+            assert np.array_equal(r.labels, np.load(corridor / "labels.npy"))
+    with occseg.read_map(bt, voxel_size=0.16, coarsen="max") as m:
+        assert m.voxel_size == 0.16 and m.dims[0] in (243, 244)
