@@ -84,6 +84,27 @@ inline std::uint64_t nonzero_mask(const std::uint32_t* counts) {
   return m;
 }
 
+// h[i] += a[i]: summing octant histograms.
+__attribute__((target_clones("avx2", "default")))
+void add_counts(std::uint32_t* __restrict h, const std::uint32_t* __restrict a, std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i) h[i] += a[i];
+}
+
+// The octree of one top block with a histogram per node (per-thread, reused).
+struct Tree {
+  struct Node {
+    Block b;
+    std::uint32_t size;   // nominal edge
+    std::uint32_t first;  // index of the first octant (octants are contiguous)
+    std::uint8_t nk;      // number of octants, 0 for blocks of Smin
+  };
+  std::vector<Node> nodes;
+  std::vector<std::uint32_t> hist;
+  std::vector<std::uint64_t> masks;
+  std::vector<Child> child;
+  std::vector<std::uint8_t> ready;
+};
+
 // Per-thread scratch for the children of one block (reused for every block the thread handles).
 struct Scratch {
   std::vector<std::uint32_t> hist;
@@ -100,8 +121,8 @@ struct Divider {
   std::size_t words;  // 64-bit words of a bin mask
   const Similarity* sim;  // params.similarity, or nullptr for the G-statistic computed here
 
-  void histogram(const Block& b, Child& c) const {
-    std::uint32_t* h = c.h;
+  // Counts the codes of block b into h (bins entries).
+  void count(const Block& b, std::uint32_t* h) const {
     std::fill(h, h + bins, 0u);
     const std::size_t nx = grid.dims.nx, ny = grid.dims.ny;
     for (std::uint32_t z = b.lo[2]; z < b.hi[2]; ++z)
@@ -110,6 +131,11 @@ struct Divider {
         for (std::uint32_t x = b.lo[0]; x < b.hi[0]; ++x)
           if (row[x] != kNoTexture) ++h[row[x]];
       }
+  }
+
+  // Total, sum f ln f in bin order and non-empty bin mask of the histogram c.h.
+  void finish(Child& c) const {
+    const std::uint32_t* h = c.h;
     c.n = 0;
     c.cells = 0;
     for (std::size_t w = 0; w < words; ++w) {
@@ -121,6 +147,11 @@ struct Divider {
         c.cells += xl(f);
       }
     }
+  }
+
+  void histogram(const Block& b, Child& c) const {
+    count(b, c.h);
+    finish(c);
   }
 
   // g_statistic(a.h, b.h, bins), bit for bit: the same terms in the same order, with the
@@ -196,6 +227,82 @@ struct Divider {
     }
     for (int k = 0; k < nk; ++k) run(kids[k], size / 2, leaves, s);  // scratch is free again here
   }
+
+  // ---- The same recursion with every histogram of a top block's octree computed up front:
+  // codes counted once, in the Smin blocks, and each larger block's histogram summed from its
+  // octants' (the top-down recursion above counts a voxel again at every level it examines).
+
+  // Worth it when the tree's histograms fit in a few MB and a bottom block holds at least a
+  // quarter as many voxels as there are bins (otherwise summing would cost more than counting).
+  bool use_tree() const {
+    const std::uint64_t ratio = static_cast<std::uint64_t>(params.smax / params.smin);
+    const std::uint64_t smin3 = static_cast<std::uint64_t>(params.smin) * params.smin * params.smin;
+    return !sim && ratio * ratio * ratio * words * 64 <= (std::uint64_t(1) << 20) && words * 64 <= 4 * smin3;
+  }
+
+  void build(Tree& t, const Block& top, std::uint32_t size) const {
+    t.nodes.clear();
+    t.nodes.push_back({top, size, 0, 0});
+    for (std::size_t i = 0; i < t.nodes.size(); ++i) {  // breadth first: octants are contiguous
+      const Tree::Node nd = t.nodes[i];
+      if (nd.size <= static_cast<std::uint32_t>(params.smin)) continue;
+      Block kids[8];
+      const int nk = octants(nd.b, nd.size, kids);
+      t.nodes[i].first = static_cast<std::uint32_t>(t.nodes.size());
+      t.nodes[i].nk = static_cast<std::uint8_t>(nk);
+      for (int k = 0; k < nk; ++k) t.nodes.push_back({kids[k], nd.size / 2, 0, 0});
+    }
+    const std::size_t stride = words * 64, nn = t.nodes.size();
+    if (t.hist.size() < nn * stride) t.hist.resize(nn * stride);
+    if (t.masks.size() < nn * words) t.masks.resize(nn * words);
+    t.child.assign(nn, Child());
+    t.ready.assign(nn, 0);
+    for (std::size_t i = nn; i-- > 1;) {  // octants after their parent: bottom up
+      const Tree::Node& nd = t.nodes[i];
+      std::uint32_t* h = t.hist.data() + i * stride;
+      if (nd.nk == 0) {
+        count(nd.b, h);
+        continue;
+      }
+      const std::uint32_t* first = t.hist.data() + std::size_t(nd.first) * stride;
+      std::copy(first, first + bins, h);
+      for (int k = 1; k < nd.nk; ++k) add_counts(h, first + k * stride, bins);
+    }
+  }
+
+  Child& child(Tree& t, std::size_t i) const {
+    Child& c = t.child[i];
+    if (!t.ready[i]) {
+      c.h = t.hist.data() + i * words * 64;
+      c.nz = t.masks.data() + i * words;
+      finish(c);
+      t.ready[i] = 1;
+    }
+    return c;
+  }
+
+  void run_tree(Tree& t, std::size_t i, std::vector<Block>& leaves) const {
+    const Tree::Node nd = t.nodes[i];
+    if (nd.size <= static_cast<std::uint32_t>(params.smin)) {
+      leaves.push_back(nd.b);
+      return;
+    }
+    if (nd.nk == 1) {
+      run_tree(t, nd.first, leaves);
+      return;
+    }
+    const Child* used[8];
+    std::size_t nu = 0;
+    for (int k = 0; k < nd.nk; ++k) {
+      const Child& c = child(t, nd.first + static_cast<std::size_t>(k));
+      if (c.n) used[nu++] = &c;
+    }
+    if (!split(used, nu)) {
+      leaves.push_back(nd.b);
+      return;
+    }
+    for (int k = 0; k < nd.nk; ++k) run_tree(t, nd.first + static_cast<std::size_t>(k), leaves);
+  }
 };
 
 }  // namespace
@@ -209,9 +316,11 @@ std::vector<Block> divide(const Grid& grid, const TextureMap& tex, const Params&
   std::vector<std::vector<Block>> per_top(tops);
   const std::size_t bins = static_cast<std::size_t>(tex.code_count());
   const Divider d{grid, tex, params, xlogx_table(), bins, (bins + 63) / 64, division_similarity(params)};
+  const bool tree_path = d.use_tree();
   // Finer chunks than threads: top blocks differ a lot in cost (uniform ones never split).
   const std::size_t chunks = std::min<std::size_t>(tops, 64);
   parallel_for(chunks, params.threads, [&](std::size_t c0, std::size_t c1) {
+    Tree tree;
     Scratch sc;
     sc.hist.assign(8 * d.words * 64, 0);
     sc.masks.assign(8 * d.words, 0);
@@ -226,7 +335,12 @@ std::vector<Block> divide(const Grid& grid, const TextureMap& tex, const Params&
         blk.lo[a] = static_cast<std::uint32_t>(c[a] * s);
         blk.hi[a] = static_cast<std::uint32_t>(std::min<std::size_t>(n[a], (c[a] + 1) * s));
       }
-      d.run(blk, s, per_top[i], sc);
+      if (tree_path) {
+        d.build(tree, blk, s);
+        d.run_tree(tree, 0, per_top[i]);
+      } else {
+        d.run(blk, s, per_top[i], sc);
+      }
     }
   });
   std::vector<Block> leaves;
