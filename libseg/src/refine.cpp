@@ -5,6 +5,10 @@
 
 #include "occseg/parallel.hpp"
 
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
 namespace occseg {
 
 const ScanDirection kSixDirections[6] = {{0, +1}, {0, -1}, {1, +1}, {1, -1}, {2, +1}, {2, -1}};
@@ -88,6 +92,32 @@ void unknown_row(std::uint8_t* st, const std::uint8_t* own, std::size_t len, int
   }
 }
 
+// Scan position of the next free/occupied boundary at or after scan position k (k >= 1) of a row
+// of len voxels scanned forward (step > 0: pair st[k-1], st[k]) or backward (pair st[j+1], st[j]
+// with j = len-1-k); len when there is none. 16 pairs per step where SSE2 exists.
+std::size_t next_boundary(const std::uint8_t* st, std::size_t k, std::size_t len, int step) {
+  const auto pair = [&](std::size_t q) {
+    const std::size_t j = step > 0 ? q : len - 1 - q;
+    const std::size_t before = step > 0 ? j - 1 : j + 1;
+    return ((st[before] ^ st[j]) & 3) == (kFree ^ kOccupied);
+  };
+#ifdef __SSE2__
+  const __m128i two = _mm_set1_epi8(kFree ^ kOccupied);
+  while (k + 16 <= len) {
+    // memory span of scan positions [k, k + 16): forward j = k..k+15, backward j = len-k-16..len-1-k
+    const std::size_t j0 = step > 0 ? k : len - k - 16;
+    const std::size_t b0 = step > 0 ? j0 - 1 : j0 + 1;
+    const __m128i x = _mm_xor_si128(_mm_loadu_si128(reinterpret_cast<const __m128i*>(st + j0)),
+                                    _mm_loadu_si128(reinterpret_cast<const __m128i*>(st + b0)));
+    const auto m = static_cast<unsigned>(_mm_movemask_epi8(_mm_cmpeq_epi8(x, two)));
+    if (m) return step > 0 ? k + static_cast<std::size_t>(__builtin_ctz(m)) : k + 15 - static_cast<std::size_t>(31 - __builtin_clz(m));
+    k += 16;
+  }
+#endif
+  while (k < len && !pair(k)) ++k;
+  return k;
+}
+
 void boundary_row(std::uint8_t* st, const std::uint8_t* own, std::size_t len, int step, int look) {
   if (len < 2) return;
   if (!any_boundary(st, st + 1, len - 1)) return;  // windows only ever start at a boundary
@@ -97,13 +127,9 @@ void boundary_row(std::uint8_t* st, const std::uint8_t* own, std::size_t len, in
   const std::uint8_t* win[kMaxLook];
   bool re[kMaxLook];
   std::size_t k = 1;
-  while (k < len) {
+  while ((k = next_boundary(st, k, len, step)) < len) {
     std::uint8_t* c = first + static_cast<std::ptrdiff_t>(k) * stride;
     const std::uint8_t a = c[-stride], s = c[0];
-    if (!is_boundary(a, s)) {
-      ++k;
-      continue;
-    }
     int n = 0;
     while (n < look && k + n < len && c[n * stride] == s) {
       win[n] = ofirst + static_cast<std::ptrdiff_t>(k + n) * stride;
@@ -149,17 +175,23 @@ void unknown_plane(std::uint8_t* st, const std::uint8_t* own, std::size_t nx, Pl
   }
 }
 
-// True when some lane with no window in progress sees a free/occupied boundary; otherwise counts
-// the running windows down.
-__attribute__((target_clones("avx2", "default")))
-bool boundary_lanes(const std::uint8_t* __restrict prev, const std::uint8_t* __restrict cur,
-                    std::uint8_t* __restrict skip, std::size_t n) {
-  std::uint8_t any = 0;
-  for (std::size_t x = 0; x < n; ++x)
-    any |= static_cast<std::uint8_t>(((prev[x] ^ cur[x]) == (kFree ^ kOccupied)) & (skip[x] == 0));
-  if (any) return true;
-  for (std::size_t x = 0; x < n; ++x) skip[x] = static_cast<std::uint8_t>(skip[x] - (skip[x] != 0));
-  return false;
+
+// Starts the window of lane x at row k of a plane scan; returns the lane's new skip count.
+inline std::uint8_t plane_window(std::uint8_t* cur, const std::uint8_t* ocur, std::size_t x, std::ptrdiff_t rs,
+                                 std::size_t k, std::size_t rows, int look, std::uint8_t a) {
+  const std::uint8_t* win[kMaxLook];
+  bool re[kMaxLook];
+  const std::uint8_t s = cur[x];
+  win[0] = ocur + static_cast<std::ptrdiff_t>(x);  // the boundary voxel itself always belongs
+  int n = 1;
+  while (n < look && k + n < rows && cur[x + n * rs] == s) {
+    win[n] = ocur + static_cast<std::ptrdiff_t>(x) + n * rs;
+    ++n;
+  }
+  classify_own(win, n, a, re);
+  for (int w = 0; w < n; ++w)
+    if (re[w]) cur[x + w * rs] = a;
+  return static_cast<std::uint8_t>(n - 1);  // resume after the window
 }
 
 void boundary_plane(std::uint8_t* st, const std::uint8_t* own, std::size_t nx, Plane pl, int step, int look,
@@ -168,32 +200,33 @@ void boundary_plane(std::uint8_t* st, const std::uint8_t* own, std::size_t nx, P
   const std::ptrdiff_t rs = pl.row * step;  // signed distance from one row to the next in scan order
   std::uint8_t* first = step > 0 ? st : st + static_cast<std::ptrdiff_t>(pl.rows - 1) * pl.row;
   const std::uint8_t* ofirst = step > 0 ? own : own + static_cast<std::ptrdiff_t>(pl.rows - 1) * pl.row;
-  const std::uint8_t* win[kMaxLook];
-  bool re[kMaxLook];
   for (std::size_t k = 1; k < pl.rows; ++k) {
     std::uint8_t* cur = first + static_cast<std::ptrdiff_t>(k) * rs;
     const std::uint8_t* prev = cur - rs;
-    // Lanes in chunks of 64: most chunks of most rows hold no boundary (vector test only).
-    for (std::size_t x0 = 0; x0 < nx; x0 += 64) {
-      const std::size_t x1 = std::min(nx, x0 + 64);
-      if (!boundary_lanes(prev + x0, cur + x0, skip + x0, x1 - x0)) continue;
-      for (std::size_t x = x0; x < x1; ++x) {
+    const std::uint8_t* ocur = ofirst + static_cast<std::ptrdiff_t>(k) * rs;
+    // A lane starts a window where it sees a boundary and has none running; running windows count
+    // down. Lanes are independent, so a vector test finds the starting lanes of 16 at once.
+    std::size_t x = 0;
+#ifdef __SSE2__
+    const __m128i two = _mm_set1_epi8(kFree ^ kOccupied), zero = _mm_setzero_si128(), one = _mm_set1_epi8(1);
+    for (; x + 16 <= nx; x += 16) {
+      const __m128i p = _mm_loadu_si128(reinterpret_cast<const __m128i*>(prev + x));
+      const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(cur + x));
+      const __m128i sk = _mm_loadu_si128(reinterpret_cast<const __m128i*>(skip + x));
+      const __m128i start = _mm_and_si128(_mm_cmpeq_epi8(_mm_xor_si128(p, c), two), _mm_cmpeq_epi8(sk, zero));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(skip + x), _mm_subs_epu8(sk, one));
+      for (auto m = static_cast<unsigned>(_mm_movemask_epi8(start)); m; m &= m - 1) {
+        const std::size_t lane = x + static_cast<std::size_t>(__builtin_ctz(m));
+        skip[lane] = plane_window(cur, ocur, lane, rs, k, pl.rows, look, prev[lane]);
+      }
+    }
+#endif
+    for (; x < nx; ++x) {
       if (skip[x]) {
         --skip[x];
         continue;
       }
-      const std::uint8_t a = prev[x], s = cur[x];
-      if (!is_boundary(a, s)) continue;
-      int n = 0;
-      while (n < look && k + n < pl.rows && cur[x + n * rs] == s) {
-        win[n] = ofirst + static_cast<std::ptrdiff_t>(k + n) * rs + static_cast<std::ptrdiff_t>(x);
-        ++n;
-      }
-      classify_own(win, n, a, re);
-      for (int w = 0; w < n; ++w)
-        if (re[w]) cur[x + w * rs] = a;
-      skip[x] = static_cast<std::uint8_t>(n - 1);  // resume after the window
-      }
+      if (is_boundary(prev[x], cur[x])) skip[x] = plane_window(cur, ocur, x, rs, k, pl.rows, look, prev[x]);
     }
   }
 }
