@@ -139,6 +139,24 @@ void lbp_row_3d(const float* p, const std::ptrdiff_t* off, std::size_t n, std::u
   lbp_row_impl<63>(p, off, n, out);
 }
 
+// lvl[x] = (v[x] != 0) + #{k : v[x] > rises[k]}.
+__attribute__((target_clones("avx2", "default")))
+void levels_row(const std::uint16_t* __restrict v, std::size_t n, const std::uint16_t* rises, std::size_t nr,
+                std::uint16_t* __restrict lvl) {
+  for (std::size_t x = 0; x < n; ++x) lvl[x] = v[x] != 0;
+  for (std::size_t k = 0; k < nr; ++k) {
+    const std::uint16_t t = rises[k];
+    for (std::size_t x = 0; x < n; ++x) lvl[x] = static_cast<std::uint16_t>(lvl[x] + (v[x] > t));
+  }
+}
+
+// code[x] = lbp[x] * bins + lvl[x].
+__attribute__((target_clones("avx2", "default")))
+void combine_row(const std::uint8_t* __restrict lbp, const std::uint16_t* __restrict lvl, std::size_t n,
+                 std::uint16_t bins, std::uint16_t* __restrict code) {
+  for (std::size_t x = 0; x < n; ++x) code[x] = static_cast<std::uint16_t>(lbp[x] * bins + lvl[x]);
+}
+
 // Other neighbourhoods (maps with an axis of size 1) are small: no dispatch.
 template <unsigned P>
 void contrast_any(const float* p, const std::ptrdiff_t* off, std::size_t n, std::uint16_t* out, unsigned present) {
@@ -228,19 +246,32 @@ TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads) {
   for (auto& h : part)
     for (int f = 0; f < ContrastQuantizer::kFine; ++f) fine[f] += h[f + 1];
   const ContrastQuantizer q(contrast_bins, fine);
-  // Pass 2: codes = lbp * bins + level, the level looked up from the parked fine step.
+  // Pass 2: codes = lbp * bins + level, the level looked up from the parked fine step v
+  // (v = step + 1, 0 for C = 0). Level = (v != 0) + #{t in rises : v > t}, where `rises` lists
+  // each v at which the level goes up (repeated when tied cuts make it jump), so a few vector
+  // compares replace the table for the usual handful of levels.
   std::vector<std::uint16_t> level(ContrastQuantizer::kFine + 1, 0);
   for (int f = 0; f < ContrastQuantizer::kFine; ++f) level[f + 1] = static_cast<std::uint16_t>(q.level_of_step(f));
+  std::vector<std::uint16_t> rises;
+  for (int v = 2; v <= ContrastQuantizer::kFine; ++v)
+    for (int k = level[v - 1]; k < level[v]; ++k) rises.push_back(static_cast<std::uint16_t>(v - 1));
+  const bool by_compares = rises.size() <= 16;
   parallel_for(nz, threads, [&](std::size_t z0, std::size_t z1) {
     std::vector<std::uint8_t> lbp(nx);
+    std::vector<std::uint16_t> lvl(nx);
     for (std::size_t z = z0; z < z1; ++z)
       for (std::size_t y = 0; y < ny; ++y) {
         std::size_t x0 = 0, x1 = 0;
         if (!interior_row(d, y, z, x0, x1)) continue;
-        std::uint16_t* row = codes + nx * (y + ny * z);
-        lbp_any<0>(p + nx * (y + ny * z) + x0, sten.off, x1 - x0, lbp.data(), sten.present);
-        for (std::size_t x = x0; x < x1; ++x)
-          row[x] = static_cast<std::uint16_t>(lbp[x - x0] * contrast_bins + level[row[x]]);
+        std::uint16_t* row = codes + nx * (y + ny * z) + x0;
+        const std::size_t n = x1 - x0;
+        lbp_any<0>(p + nx * (y + ny * z) + x0, sten.off, n, lbp.data(), sten.present);
+        if (by_compares) {
+          levels_row(row, n, rises.data(), rises.size(), lvl.data());
+        } else {
+          for (std::size_t x = 0; x < n; ++x) lvl[x] = level[row[x]];
+        }
+        combine_row(lbp.data(), lvl.data(), n, static_cast<std::uint16_t>(contrast_bins), row);
       }
   });
   return tm;
