@@ -231,19 +231,28 @@ void boundary_plane(std::uint8_t* st, const std::uint8_t* own, std::size_t nx, P
   }
 }
 
-// Runs one scan direction over the whole map, in parallel over independent lines.
+// Runs the forward and the backward scan along `axis` over the whole map, in parallel over
+// independent lines. The two scans of one line (x) or one plane of lines (y, z) run back to
+// back while its voxels are in cache: lines along one axis never share a voxel, so this is the
+// same as the whole forward scan followed by the whole backward scan, in half the sweeps.
 template <class RowFn, class PlaneFn>
-void scan(const Dims& d, ScanDirection dir, int threads, RowFn&& row_fn, PlaneFn&& plane_fn) {
-  if (dir.axis == 0) {
+void scan_axis(const Dims& d, int axis, int threads, RowFn&& row_fn, PlaneFn&& plane_fn) {
+  if (axis == 0) {
     parallel_for(d.ny * d.nz, threads, [&](std::size_t r0, std::size_t r1) {
-      for (std::size_t r = r0; r < r1; ++r) row_fn(r * d.nx, d.nx);
+      for (std::size_t r = r0; r < r1; ++r) {
+        row_fn(r * d.nx, d.nx, +1);
+        row_fn(r * d.nx, d.nx, -1);
+      }
     });
     return;
   }
-  const Plane pl = plane_shape(d, dir.axis);
-  parallel_for(plane_count(d, dir.axis), threads, [&](std::size_t o0, std::size_t o1) {
+  const Plane pl = plane_shape(d, axis);
+  parallel_for(plane_count(d, axis), threads, [&](std::size_t o0, std::size_t o1) {
     std::vector<std::uint8_t> lane(d.nx);
-    for (std::size_t o = o0; o < o1; ++o) plane_fn(plane_base(d, dir.axis, o), pl, lane.data());
+    for (std::size_t o = o0; o < o1; ++o) {
+      plane_fn(plane_base(d, axis, o), pl, lane.data(), +1);
+      plane_fn(plane_base(d, axis, o), pl, lane.data(), -1);
+    }
   });
 }
 
@@ -263,12 +272,15 @@ std::vector<std::uint8_t> own_states(const Grid& g, const Params& params) {
 
 void refine_unknown(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
                     const Params& params) {
-  for (const ScanDirection dir : kSixDirections)
-    scan(
-        d, dir, params.threads,
-        [&](std::size_t first, std::size_t len) { unknown_row(st.data() + first, own.data() + first, len, dir.step); },
-        [&](std::size_t base, Plane pl, std::uint8_t*) {
-          unknown_plane(st.data() + base, own.data() + base, d.nx, pl, dir.step);
+  // kSixDirections order: x+, x-, y+, y-, z+, z-.
+  for (int axis = 0; axis < 3; ++axis)
+    scan_axis(
+        d, axis, params.threads,
+        [&](std::size_t first, std::size_t len, int step) {
+          unknown_row(st.data() + first, own.data() + first, len, step);
+        },
+        [&](std::size_t base, Plane pl, std::uint8_t*, int step) {
+          unknown_plane(st.data() + base, own.data() + base, d.nx, pl, step);
         });
 }
 
@@ -276,14 +288,14 @@ void refine_boundaries(std::vector<std::uint8_t>& st, const std::vector<std::uin
                        const Params& params) {
   const int look = std::clamp(params.lookahead, 1, kMaxLook);
   for (int pass = 0; pass < params.refine_passes; ++pass)
-    for (const ScanDirection dir : kSixDirections)
-      scan(
-          d, dir, params.threads,
-          [&](std::size_t first, std::size_t len) {
-            boundary_row(st.data() + first, own.data() + first, len, dir.step, look);
+    for (int axis = 0; axis < 3; ++axis)
+      scan_axis(
+          d, axis, params.threads,
+          [&](std::size_t first, std::size_t len, int step) {
+            boundary_row(st.data() + first, own.data() + first, len, step, look);
           },
-          [&](std::size_t base, Plane pl, std::uint8_t* lane) {
-            boundary_plane(st.data() + base, own.data() + base, d.nx, pl, dir.step, look, lane);
+          [&](std::size_t base, Plane pl, std::uint8_t* lane, int step) {
+            boundary_plane(st.data() + base, own.data() + base, d.nx, pl, step, look, lane);
           });
 }
 
