@@ -81,6 +81,14 @@ GridFrame ScanBounds::frame(double voxel_size, double margin) const {
   return fit_frame({lo_, hi_}, voxel_size, margin);
 }
 
+void attach_progress(OccupancyFusion& fusion, const ScanOptions& options, const std::size_t* before,
+                     std::size_t total) {
+  if (!options.progress || total == 0) return;
+  fusion.set_progress([&options, before, total](std::size_t done, std::size_t) {
+    return options.progress(std::min(1.0, double(*before + done) / double(total)));
+  });
+}
+
 bool is_identity(const Eigen::Isometry3f& pose) {
   return pose.matrix() == Eigen::Matrix4f::Identity();
 }

@@ -118,24 +118,33 @@ void OccupancyFusion::insert_scan(const Vec3& sensor, const float* xyz, std::siz
     const float* p = xyz + i * stride;
     used += std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
   }
-  parallel_for(count, threads, [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) {
-      const float* p = xyz + i * stride;
-      if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) continue;
-      Vec3 end{p[0], p[1], p[2]};
-      bool hit = true;
-      if (maxr >= 0) {
-        const double dx = end[0] - sensor[0], dy = end[1] - sensor[1], dz = end[2] - sensor[2];
-        const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
-        if (len > maxr) {  // a max-range return marks free space only
-          const double s = maxr / len;
-          end = {sensor[0] + dx * s, sensor[1] + dy * s, sensor[2] + dz * s};
-          hit = false;
-        }
+  auto cast = [&](std::size_t i) {
+    const float* p = xyz + i * stride;
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) return;
+    Vec3 end{p[0], p[1], p[2]};
+    bool hit = true;
+    if (maxr >= 0) {
+      const double dx = end[0] - sensor[0], dy = end[1] - sensor[1], dz = end[2] - sensor[2];
+      const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
+      if (len > maxr) {  // a max-range return marks free space only
+        const double s = maxr / len;
+        end = {sensor[0] + dx * s, sensor[1] + dy * s, sensor[2] + dz * s};
+        hit = false;
       }
-      trace(sensor, end, hit);
     }
-  });
+    trace(sensor, end, hit);
+  };
+  // With a progress callback rays go in chunks, so long scans report; marks are ORed, so the
+  // chunking changes nothing in the result.
+  const std::size_t chunk = progress_ ? std::size_t(1) << 16 : std::max<std::size_t>(count, 1);
+  for (std::size_t c0 = 0; c0 < count; c0 += chunk) {
+    const std::size_t c1 = std::min(count, c0 + chunk);
+    parallel_for(c1 - c0, threads, [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = c0 + b; i < c0 + e; ++i) cast(i);
+    });
+    if (progress_ && !progress_(c1, count))
+      throw Error(Status::cancelled, "ray casting cancelled by the progress callback");
+  }
   const float lh = l_hit_, lm = l_miss_, lo = l_min_, hi = l_max_;
   parallel_for(marks_.size(), threads, [&](std::size_t b, std::size_t e) {
     for (std::size_t i = b; i < e; ++i) {

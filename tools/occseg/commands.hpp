@@ -6,12 +6,15 @@
 
 namespace occseg::cli {
 
-// Exit codes, documented in README.md.
-enum Exit { kOk = 0, kUsage = 1, kBadInput = 2, kInternal = 3 };
+// Exit codes, documented in docs/cli.md. A job stopped by a signal exits with 128 + the signal
+// number (130 for Ctrl-C, 143 for SIGTERM), having removed the outputs it had written.
+enum Exit { kOk = 0, kUsage = 1, kBadInput = 2, kInternal = 3, kInterrupted = 130 };
 
 using Runner = std::function<int()>;
 
 Runner add_segment(CLI::App& app);
+Runner add_demo(CLI::App& app);
+Runner add_info(CLI::App& app);
 Runner add_simulate(CLI::App& app);
 Runner add_evaluate(CLI::App& app);
 Runner add_figures(CLI::App& app);

@@ -51,12 +51,22 @@ ScanOptions scan_options(const MapInputOptions& o) {
   s.model.max_range = o.max_range;
   s.bbox = box_of(o);
   s.threads = o.threads;
+  s.progress = o.progress;
   if (o.sensor_origin || o.sensor_orientation)
     s.sensor_pose = make_pose(o.sensor_origin.value_or(std::array<double, 3>{0, 0, 0}),
                               o.sensor_orientation.value_or(std::array<double, 4>{1, 0, 0, 0}));
   return s;
 }
 #endif
+
+// numpy's name of an .npy dtype string.
+std::string npy_type(const std::string& descr) {
+  static const char* names[][2] = {{"<f4", "float32"}, {"<f8", "float64"}, {"|u1", "uint8"},
+                                   {"<u1", "uint8"},   {"<u2", "uint16"},  {"<u4", "uint32"}};
+  for (const auto& n : names)
+    if (descr == n[0]) return n[1];
+  return descr;
+}
 
 }  // namespace
 
@@ -77,9 +87,13 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
     reject(scan_opts, "--sensor-origin/--sensor-orientation/--max-range", ext);
     in.kind = InputKind::volume;
     if (ext == ".npy") {
-      in.grid = grid_from_npy(read_npy(path), o.voxel_size.value_or(1.0), path);
+      const NpyArray a = read_npy(path);
+      in.format = "NumPy .npy, " + npy_type(a.descr) + (a.fortran_order ? ", Fortran order" : ", C order");
+      in.grid = grid_from_npy(a, o.voxel_size.value_or(1.0), path);
     } else {
-      in.grid = grid_from_nrrd(read_nrrd(path), path);
+      const NrrdVolume v = read_nrrd(path);
+      in.format = std::string("NRRD, ") + nrrd_type_name(v.type);
+      in.grid = grid_from_nrrd(v, path);
       if (o.voxel_size) {  // the file's spacing, overridden; keep the first voxel centre in place
         for (double& c : in.grid.origin) c += (in.grid.voxel_size - *o.voxel_size) / 2;
         in.grid.voxel_size = *o.voxel_size;
@@ -92,12 +106,14 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
     if (ext == ".pcd") {
 #ifdef OCCSEG_HAVE_PCL
       in.grid = read_pcd(path, scan_options(o));
+      in.format = "PCL point cloud (.pcd), fused by ray casting";
 #else
       not_built(ext, "PCL (liboccseg_pcl)");
 #endif
     } else {
 #ifdef OCCSEG_HAVE_OCTOMAP
       in.grid = read_scan_graph(path, scan_options(o));
+      in.format = "OctoMap scan graph (.graph), fused by ray casting";
 #else
       not_built(ext, "OctoMap (liboccseg_octomap)");
 #endif
@@ -115,6 +131,7 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
       throw Error(Status::invalid_argument, "--coarsen '" + o.coarsen + "' is not max or mean");
     t.coarsen = o.coarsen == "mean" ? Coarsen::mean : Coarsen::max;
     in.grid = read_octree_file(path, t);
+    in.format = std::string("OctoMap tree (") + ext + (ext == ".bt" ? ", maximum likelihood)" : ", log-odds)");
 #else
     not_built(ext, "OctoMap (liboccseg_octomap)");
 #endif
@@ -130,6 +147,7 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
       options.push_back(t);
     }
     in.grid = read_map(path, options);
+    in.format = ext + " through a plugin reader";
     return in;
   }
   throw Error(Status::invalid_argument, "'" + path + "': unknown input type '" + ext +

@@ -3,6 +3,7 @@
 // adapter headers); a build without them reports Error(unsupported) for those extensions.
 #pragma once
 #include <array>
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -19,6 +20,7 @@ struct MapInputOptions {
   double max_range = -1;                          // clouds: metres, < 0 unlimited
   std::string coarsen = "max";                    // trees at a coarser voxel size: max or mean
   int threads = 0;
+  std::function<bool(double fraction)> progress;  // clouds: fusion progress (ScanOptions::progress)
 };
 
 enum class InputKind { volume, cloud, tree };
@@ -26,6 +28,7 @@ enum class InputKind { volume, cloud, tree };
 struct MapInput {
   Grid grid;
   InputKind kind = InputKind::volume;
+  std::string format;  // for people: "NumPy .npy, float32, C order", "PCL point cloud (.pcd), 209280 ..."
 };
 
 // Reads .npy, .nrrd, .pcd, .graph, .bt or .ot (case-insensitive extension). Throws

@@ -145,6 +145,9 @@ int draw_text(Image& img, int x, int y, const std::string& text, Rgb colour, int
 
 Image render_figure(const std::vector<Volume>& rows, const std::vector<Slice>& slices, const FigureOptions& o) {
   if (o.scale < 1 || o.scale > 16) throw Error(Status::invalid_argument, "figure scale must be 1..16");
+  if (o.shrink < 1 || o.shrink > 64) throw Error(Status::invalid_argument, "figure shrink must be 1..64");
+  const std::size_t k = static_cast<std::size_t>(o.shrink);
+  auto pixels = [k](std::size_t voxels) { return (voxels + k - 1) / k; };
   if (rows.empty() || slices.empty()) throw Error(Status::invalid_argument, "a figure needs a volume and a slice");
   std::vector<std::size_t> col_w(slices.size(), 0), row_h(rows.size(), 0);
   bool any_probability = false;
@@ -160,8 +163,8 @@ Image render_figure(const std::vector<Volume>& rows, const std::vector<Slice>& s
         throw Error(Status::invalid_argument, "slice " + slice_caption(s) + " is outside volume '" + v.title + "'");
       std::size_t w, h;
       slice_size(v.dims, s, w, h);
-      col_w[c] = std::max(col_w[c], w * o.scale);
-      row_h[r] = std::max(row_h[r], h * o.scale);
+      col_w[c] = std::max(col_w[c], pixels(w) * o.scale);
+      row_h[r] = std::max(row_h[r], pixels(h) * o.scale);
     }
   }
   const int caption = 10, title = o.title.empty() ? 0 : 14, legend = o.legend ? 22 : 0;
@@ -182,19 +185,22 @@ Image render_figure(const std::vector<Volume>& rows, const std::vector<Slice>& s
       draw_text(img, x0, y0, v.title + "  " + slice_caption(s), kInk);
       std::size_t w, h;
       slice_size(v.dims, s, w, h);
+      // (u, q): pixel column and row (from the top) of the panel, before scaling; each shows the
+      // voxel (u * k, q * k rows below the top) of the slice.
+      const std::size_t pw = pixels(w), ph = pixels(h);
       auto label_at = [&](std::size_t u, std::size_t q) -> std::uint64_t {
-        const std::size_t i = voxel_at(v.dims, s, u, q, h);
+        const std::size_t i = voxel_at(v.dims, s, u * k, q * k, h);
         return v.labels ? v.labels[i] : (v.states ? v.states[i] : 0);
       };
-      for (std::size_t q = 0; q < h; ++q)
-        for (std::size_t u = 0; u < w; ++u) {
-          const std::size_t i = voxel_at(v.dims, s, u, q, h);
+      for (std::size_t q = 0; q < ph; ++q)
+        for (std::size_t u = 0; u < pw; ++u) {
+          const std::size_t i = voxel_at(v.dims, s, u * k, q * k, h);
           Rgb colour;
           if (v.states) {
             colour = state_colour(v.states[i]);
             if (v.distinct_occupied && v.labels && v.states[i] == 2) colour = occupied_colour(v.labels[i]);
             const std::uint64_t l = label_at(u, q);
-            const bool edge = (u + 1 < w && label_at(u + 1, q) != l) || (q > 0 && label_at(u, q - 1) != l);
+            const bool edge = (u + 1 < pw && label_at(u + 1, q) != l) || (q > 0 && label_at(u, q - 1) != l);
             if (edge) colour = darker(colour);
           } else {
             colour = grey_of(v.probability[i]);

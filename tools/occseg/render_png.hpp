@@ -45,6 +45,7 @@ struct Slice {
 struct FigureOptions {
   std::string title;   // drawn above everything ("" for none)
   int scale = 1;       // pixels per voxel
+  int shrink = 1;      // voxels per pixel along each axis (every shrink-th voxel is drawn), for large maps
   bool legend = true;  // state colours, boundary, probability ramp
 };
 
@@ -65,7 +66,8 @@ int text_width(const std::string& text, int scale = 1);
 
 // A grid of panels: one row per volume, one column per slice, each captioned
 // "<volume title>  <slice>", then the legend. Throws Error(invalid_argument) when a volume has
-// neither probabilities nor states, a slice index is out of range, or the scale is not 1..16.
+// neither probabilities nor states, a slice index is out of range, or the scale or the shrink
+// is not 1..16 / 1..64. A panel is ceil(w / shrink) * scale pixels wide for a slice w voxels wide.
 Image render_figure(const std::vector<Volume>& rows, const std::vector<Slice>& slices, const FigureOptions& options);
 
 // Writes an 8-bit PNG (indexed colour when the image has at most 256 colours, else RGB)

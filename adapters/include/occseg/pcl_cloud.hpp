@@ -116,7 +116,13 @@ Grid integrate_clouds(const std::vector<const pcl::PointCloud<PointT>*>& clouds,
     frame = bounds.frame(options.voxel_size, options.margin);
   }
   OccupancyFusion fusion(frame, options.model);
-  for (const auto* c : clouds) insert_cloud(fusion, *c, pose_of(*c), options.threads);
+  std::size_t total = 0, before = 0;
+  for (const auto* c : clouds) total += c->points.size();
+  attach_progress(fusion, options, &before, total);
+  for (const auto* c : clouds) {
+    insert_cloud(fusion, *c, pose_of(*c), options.threads);
+    before += c->points.size();
+  }
   if (!fusion.rays()) throw Error(Status::bad_value, "no finite point in the cloud(s)");
   return fusion.grid();
 }

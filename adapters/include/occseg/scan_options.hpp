@@ -8,6 +8,7 @@
 #pragma once
 #include <Eigen/Geometry>
 #include <cstddef>
+#include <functional>
 #include <optional>
 
 #include "occseg/fusion.hpp"
@@ -29,6 +30,9 @@ struct ScanOptions {
   // a scan graph node's pose); applied to every scan.
   std::optional<Eigen::Isometry3f> sensor_pose;
   int threads = 0;              // 0: all cores; results never depend on it
+  // Called while fusing with the share of all points ray-cast so far, in [0, 1], from the
+  // calling thread; returning false cancels: the reader throws Error(cancelled).
+  std::function<bool(double fraction)> progress;
   // Throws Error(invalid_argument / bad_value) naming the field when a value is out of range.
   void validate() const;
 };
@@ -61,6 +65,12 @@ class ScanBounds {
 // when the pose is the identity) and ray-casts from pose.translation().
 void insert_points(OccupancyFusion& fusion, const Eigen::Isometry3f& pose, const float* xyz,
                    std::size_t count, std::size_t stride, int threads = 0);
+
+// Feeds options.progress (if set) from the fusion: the fraction is (before + rays of the current
+// scan) / total, where `*before` counts the points of the scans already inserted (the caller
+// advances it) and `total` those of all scans.
+void attach_progress(OccupancyFusion& fusion, const ScanOptions& options, const std::size_t* before,
+                     std::size_t total);
 
 // True when the pose is exactly the identity (no transform needed).
 bool is_identity(const Eigen::Isometry3f& pose);

@@ -3,6 +3,7 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "occseg/grid.hpp"
@@ -47,6 +48,13 @@ class OccupancyFusion {
   void insert_scan(const Vec3& sensor, const float* xyz, std::size_t count, std::size_t stride_floats,
                    int threads = 0);
 
+  // Progress of insert_scan, for long scans: called from the calling thread after each chunk
+  // of rays with the rays of the current scan traced so far and the scan's point count.
+  // Returning false cancels: insert_scan throws Error(cancelled) before touching the grid, which
+  // keeps the scans inserted earlier. An empty function (the default) reports nothing.
+  using Progress = std::function<bool(std::size_t done, std::size_t count)>;
+  void set_progress(Progress progress) { progress_ = std::move(progress); }
+
   const GridFrame& frame() const { return frame_; }
   const std::vector<float>& log_odds() const { return log_odds_; }
   // The occupancy probabilities; untouched voxels are exactly 0.5.
@@ -63,6 +71,7 @@ class OccupancyFusion {
   std::vector<float> log_odds_;
   std::vector<std::uint8_t> marks_;  // per scan: bit 0 miss, bit 1 hit
   std::uint64_t scans_ = 0, rays_ = 0;
+  Progress progress_;
 };
 
 // The frame (origin and dims) of the smallest voxel-aligned box that holds all the points and

@@ -1,8 +1,10 @@
 #include "occseg/sim/scanner.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <string>
 
 #include "occseg/error.hpp"
@@ -104,7 +106,13 @@ Grid simulate_map(const Scene& scene, const ScanConfig& config) {
 
   if (config.mode == ScanMode::full3d) {
     OccupancyFusion fusion(f, model);
-    for (std::size_t k = 0; k < scene.viewpoints.size(); ++k) {
+    std::size_t k = 0;
+    const double views = static_cast<double>(scene.viewpoints.size());
+    if (config.progress)
+      fusion.set_progress([&](std::size_t done, std::size_t count) {
+        return config.progress((static_cast<double>(k) + double(done) / double(count)) / views);
+      });
+    for (; k < scene.viewpoints.size(); ++k) {
       const Viewpoint& v = scene.viewpoints[k];
       Rng rng(mix_seed(config.seed, 0, k));
       const Vec3 s = sensor_position(scene, v, config.mode, 0);
@@ -119,8 +127,11 @@ Grid simulate_map(const Scene& scene, const ScanConfig& config) {
   const std::size_t layer = f.dims.nx * f.dims.ny;
   std::vector<std::vector<Vec3>> dirs;
   for (const Viewpoint& v : scene.viewpoints) dirs.push_back(ray_directions(v, config.mode, config.angle_step_deg));
+  std::size_t layers_done = 0;
+  std::atomic<bool> stop{false};
+  std::mutex report;
   parallel_for(f.dims.nz, config.threads, [&](std::size_t z0, std::size_t z1) {
-    for (std::size_t z = z0; z < z1; ++z) {
+    for (std::size_t z = z0; z < z1 && !stop; ++z) {
       GridFrame lf = f;
       lf.dims.nz = 1;
       lf.origin[2] = f.origin[2] + static_cast<double>(z) * f.voxel_size;
@@ -132,8 +143,13 @@ Grid simulate_map(const Scene& scene, const ScanConfig& config) {
       }
       const Grid g = fusion.grid();
       std::copy(g.p.begin(), g.p.end(), out.p.begin() + z * layer);
+      if (config.progress) {
+        std::lock_guard<std::mutex> lock(report);  // one call at a time, fractions in order
+        if (!stop && !config.progress(double(++layers_done) / double(f.dims.nz))) stop = true;
+      }
     }
   });
+  if (stop) throw Error(Status::cancelled, "simulation cancelled by the progress callback");
   return out;
 }
 

@@ -8,6 +8,7 @@
 //    are fused into one 3D grid.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "occseg/fusion.hpp"
@@ -28,6 +29,10 @@ struct ScanConfig {
   std::uint64_t seed = 1;
   SensorModel model;            // inverse sensor model of the fusion (OctoMap's defaults)
   int threads = 0;              // 0: all cores; the map never depends on it
+  // simulate_map reports the share of the work done, in [0, 1] (layers in planar mode, rays in
+  // full3d), one call at a time, possibly from a worker thread; returning false cancels:
+  // simulate_map throws Error(cancelled).
+  std::function<bool(double fraction)> progress;
   // Throws Error(invalid_argument) naming the field when a value is out of range.
   void validate() const;
 };

@@ -1,0 +1,86 @@
+#include "options.hpp"
+
+#include <sstream>
+
+#include "occseg/error.hpp"
+
+namespace occseg::cli {
+
+void add_pipeline_options(CLI::App* c, PipelineArgs& a) {
+  c->add_option("--preset", a.preset, "paper (as published) or default (with the safety rules; the default)")
+      ->check(CLI::IsMember({"paper", "default"}));
+  c->add_option("--param", a.params, "NAME=VALUE: set a pipeline or plugin parameter (repeatable; list below)")
+      ->type_name("NAME=VALUE");
+  c->add_option("--threads", a.threads, "worker threads, 0 = all cores (results never depend on it)")
+      ->check(CLI::Range(0, 1024));
+  c->footer([] { return params_help(); });
+}
+
+Params make_params(const PipelineArgs& a) {
+  Params p;
+  set_param(p, "preset", a.preset);
+  for (const std::string& kv : a.params) {
+    const std::size_t eq = kv.find('=');
+    if (eq == std::string::npos || eq == 0)
+      throw Error(Status::invalid_argument, "--param '" + kv + "' is not NAME=VALUE");
+    set_param(p, kv.substr(0, eq), kv.substr(eq + 1));
+  }
+  p.threads = a.threads;
+  p.validate();
+  return p;
+}
+
+std::string params_help() {
+  std::ostringstream o;
+  o << "Parameters for --param NAME=VALUE (defaults of the default preset; docs/algorithm.md):\n";
+  for (const ParamInfo& i : all_params()) {
+    const std::string owner = param_owner(i.name);
+    o << "  " << i.name << " (" << i.kind << ", default " << param_default(i.name);
+    if (std::string(i.kind) != "string") o << ", " << i.min << ".." << i.max;
+    if (owner != "builtin") o << ", plugin " << owner;
+    o << "): " << i.description << "\n";
+  }
+  return o.str();
+}
+
+void add_input_options(CLI::App* c, InputArgs& a) {
+  c->add_option("--voxel-size", a.voxel_size,
+                "voxel edge in metres (.npy: default 1; .nrrd: the file's spacing; .pcd/.graph: default 0.05; "
+                ".bt/.ot: a multiple of the tree resolution, default the resolution)")
+      ->check(CLI::PositiveNumber);
+  c->add_option("--bbox", a.bbox, "grid box XMIN YMIN ZMIN XMAX YMAX ZMAX in metres (.pcd .graph .bt .ot; default: fitted)")
+      ->expected(6);
+  c->add_option("--sensor-origin", a.sensor_origin, "X Y Z: sensor position for .pcd/.graph (default: stored pose)")
+      ->expected(3);
+  c->add_option("--sensor-orientation", a.sensor_orientation, "W X Y Z: sensor rotation quaternion for .pcd/.graph")
+      ->expected(4);
+  c->add_option("--max-range", a.max_range, "metres; longer returns mark free space only (.pcd/.graph)")
+      ->check(CLI::PositiveNumber);
+  c->add_option("--coarsen", a.coarsen, "max or mean: rule for .bt/.ot at a coarser voxel size")
+      ->check(CLI::IsMember({"max", "mean"}));
+}
+
+MapInputOptions make_input_options(const InputArgs& a, int threads) {
+  MapInputOptions in;
+  if (a.voxel_size > 0) in.voxel_size = a.voxel_size;
+  if (!a.bbox.empty()) in.bbox = std::array<double, 6>{a.bbox[0], a.bbox[1], a.bbox[2], a.bbox[3], a.bbox[4], a.bbox[5]};
+  if (!a.sensor_origin.empty())
+    in.sensor_origin = std::array<double, 3>{a.sensor_origin[0], a.sensor_origin[1], a.sensor_origin[2]};
+  if (!a.sensor_orientation.empty())
+    in.sensor_orientation = std::array<double, 4>{a.sensor_orientation[0], a.sensor_orientation[1],
+                                                  a.sensor_orientation[2], a.sensor_orientation[3]};
+  in.max_range = a.max_range;
+  in.coarsen = a.coarsen;
+  in.threads = threads;
+  return in;
+}
+
+void add_report_options(CLI::App* c, ReportArgs& a, bool with_top) {
+  c->add_flag("--json", a.json, "print a machine-readable JSON summary on stdout instead of the text");
+  c->add_flag("--quiet,-q", a.quiet, "no text summary and no progress bar (errors still go to stderr)");
+  if (with_top)
+    c->add_option("--top", a.top, "number of largest objects listed in the summary (default 5)")
+        ->check(CLI::Range(0, 1000000));
+}
+
+}  // namespace occseg::cli

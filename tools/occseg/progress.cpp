@@ -1,0 +1,123 @@
+#include "progress.hpp"
+
+#include <sys/ioctl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+
+#include "occseg/error.hpp"
+
+namespace occseg::cli {
+
+namespace {
+
+volatile std::sig_atomic_t g_signal = 0;
+
+extern "C" void on_signal(int sig) {
+  if (!g_signal) g_signal = sig;
+}
+
+int terminal_width() {
+  winsize w{};
+  if (::ioctl(STDERR_FILENO, TIOCGWINSZ, &w) == 0 && w.ws_col >= 20) return w.ws_col;
+  return 80;
+}
+
+// Share of the segmentation time each stage usually takes (measured on the simulated scenes),
+// so the bar moves evenly; the order is segment()'s.
+struct StageWeight {
+  const char* name;
+  double weight;
+};
+constexpr StageWeight kStages[] = {
+    {"texture", 0.25}, {"division", 0.20}, {"creation", 0.10}, {"refinement", 0.30}, {"labelling", 0.15}};
+
+}  // namespace
+
+void install_interrupt_handlers() {
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESTART;  // reads and writes carry on; the job stops at its next check
+  ::sigaction(SIGINT, &sa, nullptr);
+  ::sigaction(SIGTERM, &sa, nullptr);
+}
+
+int interrupt_signal() { return g_signal; }
+
+void check_interrupted() {
+  if (g_signal)
+    throw Error(Status::cancelled, g_signal == SIGINT ? "interrupted (Ctrl-C)" : "terminated by a signal");
+}
+
+bool stderr_is_terminal() { return ::isatty(STDERR_FILENO) == 1; }
+
+ProgressBar::ProgressBar(bool enabled, double delay)
+    : enabled_(enabled), delay_(delay), start_(std::chrono::steady_clock::now()) {}
+
+ProgressBar::~ProgressBar() { clear(); }
+
+double ProgressBar::elapsed() const {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+}
+
+bool ProgressBar::update(const std::string& label, double fraction) {
+  if (g_signal) return false;
+  if (!enabled_) return true;
+  const double t = elapsed();
+  if (t < delay_) return true;
+  std::lock_guard<std::mutex> lock(mutex_);
+  // At most ten redraws a second, but always on a new phase.
+  if (label == last_label_ && t - last_draw_ < 0.1 && fraction < 1.0) return true;
+  draw(label, fraction, t);
+  last_draw_ = t;
+  last_label_ = label;
+  return !g_signal;
+}
+
+void ProgressBar::draw(const std::string& label, double fraction, double seconds) {
+  fraction = std::clamp(fraction, 0.0, 1.0);
+  const int width = 30, filled = static_cast<int>(fraction * width + 0.5);
+  char tail[48];
+  std::snprintf(tail, sizeof tail, "] %3d%%  %.1f s", static_cast<int>(fraction * 100 + 0.5), seconds);
+  std::string line = "occseg: " + label + " [" + std::string(filled, '#') + std::string(width - filled, '.') + tail;
+  const std::size_t max = static_cast<std::size_t>(terminal_width() - 1);
+  if (line.size() > max) line.resize(max);
+  line = "\r" + line + "\033[K";
+  if (::write(STDERR_FILENO, line.data(), line.size()) < 0) enabled_ = false;
+  drawn_ = true;
+}
+
+void ProgressBar::clear() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!drawn_) return;
+  static const char erase[] = "\r\033[K";
+  if (::write(STDERR_FILENO, erase, sizeof erase - 1) < 0) enabled_ = false;
+  drawn_ = false;
+  last_label_.clear();
+}
+
+std::function<bool(const char*, double)> ProgressBar::segment_callback() {
+  return [this](const char* stage, double fraction) {
+    double before = 0, weight = 0;
+    for (const StageWeight& s : kStages) {
+      if (std::strcmp(s.name, stage) == 0) {
+        weight = s.weight;
+        break;
+      }
+      before += s.weight;
+    }
+    if (weight == 0) before = 0;  // a stage this table does not know: show it on its own
+    return update(std::string("segmenting: ") + stage, weight ? before + weight * fraction : fraction);
+  };
+}
+
+std::function<bool(double)> ProgressBar::callback(const std::string& label) {
+  return [this, label](double fraction) { return update(label, fraction); };
+}
+
+}  // namespace occseg::cli

@@ -1,0 +1,57 @@
+// Progress bar on stderr and Ctrl-C for long jobs of the `occseg` tool. The library reports
+// progress through callbacks (Params::progress, ScanOptions::progress, ScanConfig::progress);
+// the callbacks made here draw the bar and return false once the user pressed Ctrl-C, so the
+// library stops at its next report and throws Error(cancelled).
+#pragma once
+#include <atomic>
+#include <chrono>
+#include <functional>
+#include <mutex>
+#include <string>
+
+namespace occseg::cli {
+
+// Installs handlers for SIGINT and SIGTERM that only record the signal (async-signal-safe); the
+// job notices it at its next progress report or check_interrupted().
+void install_interrupt_handlers();
+// The signal received (SIGINT, SIGTERM) or 0.
+int interrupt_signal();
+// Throws Error(cancelled) when a signal was received.
+void check_interrupted();
+
+// True when stderr is a terminal (isatty).
+bool stderr_is_terminal();
+
+class ProgressBar {
+ public:
+  // Draws only when `enabled` (the commands pass: stderr is a terminal and not --quiet) and the
+  // job has lasted longer than `delay_seconds` since construction, so short jobs stay silent.
+  explicit ProgressBar(bool enabled, double delay_seconds = 0.5);
+  ~ProgressBar();
+  ProgressBar(const ProgressBar&) = delete;
+  ProgressBar& operator=(const ProgressBar&) = delete;
+
+  // Shows `fraction` (0..1) of the phase `label` ("segmenting: refinement"); returns false once a
+  // signal was received. Thread-safe.
+  bool update(const std::string& label, double fraction);
+  // Callback for Params::progress: the five stages mapped onto one bar, weighted by their usual
+  // share of the time.
+  std::function<bool(const char* stage, double fraction)> segment_callback();
+  // Callback for ScanOptions::progress and ScanConfig::progress, under `label`.
+  std::function<bool(double fraction)> callback(const std::string& label);
+  // Erases the bar, if drawn (before printing to the terminal, and at the end).
+  void clear();
+  double elapsed() const;
+
+ private:
+  void draw(const std::string& label, double fraction, double seconds);
+  std::atomic<bool> enabled_;
+  double delay_;
+  std::chrono::steady_clock::time_point start_;
+  double last_draw_ = -1;
+  std::string last_label_;
+  bool drawn_ = false;
+  std::mutex mutex_;
+};
+
+}  // namespace occseg::cli
