@@ -1,6 +1,8 @@
 #include "occseg/segment.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #if defined(__GLIBC__)
 #include <malloc.h>
@@ -9,6 +11,7 @@
 #include "occseg/create.hpp"
 #include "occseg/departures.hpp"
 #include "occseg/error.hpp"
+#include "occseg/parallel.hpp"
 #include "occseg/refine.hpp"
 #include "occseg/registry.hpp"
 #include "occseg/texture.hpp"
@@ -56,11 +59,38 @@ void release_freed_memory() {
 #endif
 }
 
+// True when every value is in [0, 1] (NaN fails both compares). Branch-free so that it
+// vectorises; counts instead of stopping at the first bad value.
+__attribute__((target_clones("avx2", "default")))
+bool all_probabilities(const float* p, std::size_t n) {
+  std::size_t bad = 0;
+  for (std::size_t i = 0; i < n; ++i) bad += !((p[i] >= 0.0f) & (p[i] <= 1.0f));
+  return bad == 0;
+}
+
+// check_probabilities(), with the common case (a valid map) tested in parallel vector code; the
+// scalar check runs only to name the first bad voxel.
+void check_map(const Grid& grid, int threads) {
+  check_dims(grid.dims);
+  bool ok = grid.p.size() == grid.dims.count();
+  if (ok) {
+    const std::size_t chunk = std::size_t(1) << 18, n = grid.p.size();
+    const std::size_t chunks = (n + chunk - 1) / chunk;
+    std::vector<std::uint8_t> good(chunks, 0);
+    parallel_for(chunks, threads, [&](std::size_t c0, std::size_t c1) {
+      for (std::size_t c = c0; c < c1; ++c)
+        good[c] = all_probabilities(grid.p.data() + c * chunk, std::min(chunk, n - c * chunk));
+    });
+    for (auto g : good) ok = ok && g;
+  }
+  if (!ok || !(grid.voxel_size > 0) || !std::isfinite(grid.voxel_size)) check_probabilities(grid);
+}
+
 }  // namespace
 
 Result segment(const Grid& grid, const Params& params, bool keep_stages) {
   params.validate();
-  check_probabilities(grid);
+  check_map(grid, params.threads);
   Result r;
   r.dims = grid.dims;
   Stages st(params, r);
