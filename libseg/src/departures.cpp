@@ -64,6 +64,12 @@ void half_mask(const std::uint8_t* own, std::uint8_t* m, std::size_t n) {
   for (std::size_t i = 0; i < n; ++i) m[i] = own[i] == kUnknown;
 }
 
+// m[i] &= own[i] is at 0.5.
+__attribute__((target_clones("avx2", "default")))
+void keep_half(std::uint8_t* __restrict m, const std::uint8_t* __restrict own, std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i) m[i] = static_cast<std::uint8_t>(m[i] & (own[i] == kUnknown));
+}
+
 // The per-voxel rules on one row of voxels (x in [0, n)); xm/xp, ym/yp, zm/zp are the own states
 // of the neighbours, with `none` (all free) rows standing in outside the map.
 inline std::uint8_t rule(std::uint8_t s, std::uint8_t o, std::uint8_t region, bool touches) {
@@ -111,8 +117,8 @@ std::vector<std::uint8_t> unknown_regions(const std::vector<std::uint8_t>& own, 
   }
   // Six passes end in m again. The opening only shrinks the mask; keep it on 0.5 voxels anyway.
   parallel_for((m.size() + chunk - 1) / chunk, params.threads, [&](std::size_t c0, std::size_t c1) {
-    for (std::size_t i = c0 * chunk, e = std::min(m.size(), c1 * chunk); i < e; ++i)
-      m[i] = m[i] & (own[i] == kUnknown);
+    const std::size_t b = c0 * chunk, e = std::min(m.size(), c1 * chunk);
+    keep_half(m.data() + b, own.data() + b, e - b);
   });
   return m;
 }
