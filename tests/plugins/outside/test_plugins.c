@@ -5,6 +5,7 @@
  *   test_plugins errors BROKEN_DIR            every way loading can fail leaves the registry unchanged
  *   test_plugins default                      occseg_plugins_load_default over OCCSEG_PLUGIN_PATH
  *   test_plugins octomap FILE.bt              the installed OctoMap reader plugin, found by itself
+ *   test_plugins pcd FILE.pcd                 the installed PCL reader plugin
  */
 #include <occseg/occseg.h>
 #include <stdio.h>
@@ -322,11 +323,33 @@ static void octomap(const char *bt) {
   occseg_map_free(m);
 }
 
+static void pcd(const char *file) {
+  const char *opts[] = {"voxel_size=0.1", NULL}, *bad[] = {"voxel_size=-1", NULL};
+  occseg_map *m = NULL;
+  size_t dims[3];
+  double vs = 0, o[3];
+  CHECK(occseg_plugins_load_default(NULL) == OCCSEG_OK);
+  CHECK(find_stage(OCCSEG_STAGE_READER, ".pcd", "pcl_reader"));
+  CHECK(occseg_map_read_options(&m, file, opts) == OCCSEG_OK);
+  CHECK(m && occseg_map_voxel_size(m, &vs) == OCCSEG_OK && vs == 0.1);
+  CHECK(m && occseg_map_dims(m, dims) == OCCSEG_OK && occseg_map_origin(m, o) == OCCSEG_OK);
+  /* Points 0.69 .. 2.59 m deep seen from the origin: the fitted grid holds the sensor and them. */
+  CHECK(m && o[0] <= 0 && o[1] <= 0 && o[2] <= 0 && o[0] + dims[0] * vs >= 0 && o[1] + dims[1] * vs >= 0 &&
+        o[2] + dims[2] * vs >= 0);
+  CHECK(m && dims[2] * vs >= 2.59 && dims[2] < 40);
+  printf("pcd: %zu x %zu x %zu voxels of %.2f m, origin (%.2f, %.2f, %.2f)\n", dims[0], dims[1], dims[2], vs, o[0],
+         o[1], o[2]);
+  occseg_map_free(m);
+  m = NULL;
+  EXPECT_FAIL(occseg_map_read_options(&m, file, bad), OCCSEG_EINVAL, "voxel size -1", "plugin 'pcl_reader'", NULL);
+}
+
 int main(int argc, char **argv) {
   if (argc == 4 && strcmp(argv[1], "example") == 0) example(argv[2], argv[3]);
   else if (argc == 3 && strcmp(argv[1], "errors") == 0) errors(argv[2]);
   else if (argc == 2 && strcmp(argv[1], "default") == 0) default_path();
   else if (argc == 3 && strcmp(argv[1], "octomap") == 0) octomap(argv[2]);
+  else if (argc == 3 && strcmp(argv[1], "pcd") == 0) pcd(argv[2]);
   else {
     fprintf(stderr, "usage: test_plugins example SO WORKDIR | errors DIR | default | octomap FILE.bt\n");
     return 2;
