@@ -4,6 +4,7 @@
  *   test_plugins example EXAMPLE_SO WORKDIR   the example plugin: listing, parameters, stages, .occtxt
  *   test_plugins errors BROKEN_DIR            every way loading can fail leaves the registry unchanged
  *   test_plugins default                      occseg_plugins_load_default over OCCSEG_PLUGIN_PATH
+ *   test_plugins default_broken               the same over a folder of broken plugins
  *   test_plugins octomap FILE.bt              the installed OctoMap reader plugin, found by itself
  *   test_plugins pcd FILE.pcd                 the installed PCL reader plugin
  */
@@ -281,6 +282,20 @@ static void default_path(void) {
   CHECK(occseg_plugins_load_default(&loaded) == OCCSEG_OK && loaded == 0);
 }
 
+/* A folder of broken plugins on the search path: every file is tried, the good one loads, and
+ * the failures are all reported at once. */
+static void default_broken(void) {
+  uint32_t loaded = 99;
+  const char *e;
+  EXPECT_FAIL(occseg_plugins_load_default(&loaded), OCCSEG_EPLUGIN, "abi_major.so': ABI mismatch",
+              "no_entry.so': no entry point", "register_fails.so'");
+  e = occseg_last_error();
+  CHECK(strstr(e, "not_a_library.so': cannot be loaded") != NULL && strstr(e, "; ") != NULL);
+  CHECK(strstr(e, "duplicate_name.so") == NULL); /* named like a loaded plugin: skipped, not an error */
+  /* misbehaving, plus the reader plugins of the install's own folder when they are built. */
+  CHECK(loaded >= 1 && find_plugin("misbehaving") >= 0);
+}
+
 static void octomap(const char *bt) {
   occseg_map *m = NULL;
   occseg_result *r = NULL;
@@ -348,6 +363,7 @@ int main(int argc, char **argv) {
   if (argc == 4 && strcmp(argv[1], "example") == 0) example(argv[2], argv[3]);
   else if (argc == 3 && strcmp(argv[1], "errors") == 0) errors(argv[2]);
   else if (argc == 2 && strcmp(argv[1], "default") == 0) default_path();
+  else if (argc == 2 && strcmp(argv[1], "default_broken") == 0) default_broken();
   else if (argc == 3 && strcmp(argv[1], "octomap") == 0) octomap(argv[2]);
   else if (argc == 3 && strcmp(argv[1], "pcd") == 0) pcd(argv[2]);
   else {
