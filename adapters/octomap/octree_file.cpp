@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "occseg/error.hpp"
+#include "occseg/file_read.hpp"
 #include "occseg/octomap_tree.hpp"
 
 namespace occseg {
@@ -24,13 +25,7 @@ constexpr int kTreeDepth = 16;  // octomap's OcTree, ColorOcTree and OcTreeStamp
   throw Error(Status::format, "'" + path + "' is not a valid OctoMap file: " + why);
 }
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(Status::io, "cannot open '" + path + "': " + std::strerror(errno));
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) throw Error(Status::io, "cannot read '" + path + "'");
-  return bytes;
-}
+std::string slurp(const std::string& path) { return read_file(path); }
 
 struct Header {
   bool binary = false;  // .bt ("# Octomap OcTree binary file") or .ot ("# Octomap OcTree file")

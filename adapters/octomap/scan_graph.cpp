@@ -10,6 +10,7 @@
 #include <string>
 
 #include "occseg/error.hpp"
+#include "occseg/file_read.hpp"
 #include "occseg/octomap_tree.hpp"
 
 namespace occseg {
@@ -115,13 +116,7 @@ Grid integrate_scan_graph(const octomap::ScanGraph& graph, const ScanOptions& op
 
 Grid read_scan_graph(const std::string& path, const ScanOptions& options) {
   options.validate();
-  std::string bytes;
-  {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error(Status::io, "cannot open '" + path + "': " + std::strerror(errno));
-    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    if (in.bad()) throw Error(Status::io, "cannot read '" + path + "'");
-  }
+  std::string bytes = read_file(path);
   GraphChecker{bytes, path}.run();
   bytes.clear();
   bytes.shrink_to_fit();

@@ -5,6 +5,7 @@
 #include <pcl/exceptions.h>
 #include <pcl/io/pcd_io.h>
 
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -12,6 +13,7 @@
 #include <string>
 
 #include "occseg/error.hpp"
+#include "occseg/file_read.hpp"
 #include "occseg/file_write.hpp"
 #include "occseg/pcd.hpp"
 #include "occseg/pcl_cloud.hpp"
@@ -44,6 +46,7 @@ void check_xyz_fields(const std::string& path, const pcl::PCLPointCloud2& blob) 
 // is checked here first: consistent field lists, WIDTH x HEIGHT = POINTS, and enough bytes for
 // the binary encodings.
 void check_header(const std::string& path) {
+  check_readable(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(Status::io, "cannot open '" + path + "': " + std::strerror(errno));
   std::size_t nfields = 0, nsize = 0, ntype = 0, ncount = 0, point_bytes = 0, width = 0, height = 1, points = 0;
@@ -52,7 +55,12 @@ void check_header(const std::string& path) {
   std::string line, data;
   for (int lines = 0; data.empty() && std::getline(in, line); ++lines) {
     if (lines > 1000) bad_file(path, "no DATA line in the first 1000 lines");
-    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty()) continue;  // the one kind of line PCL skips besides comments
+    // PCL ends its header at the first line it does not know, and then crashes on the fields
+    // it has not read: such lines are refused here.
+    if (std::isspace(static_cast<unsigned char>(line[0])))
+      bad_file(path, "header line " + std::to_string(lines + 1) + " starts with a blank");
+    if (line.back() == '\r') line.pop_back();
     std::istringstream ls(line);
     std::string key, v;
     if (!(ls >> key) || key[0] == '#') continue;
@@ -82,6 +90,10 @@ void check_header(const std::string& path) {
     else if (key == "HEIGHT" && vals.size() == 1) height = number(vals[0]);
     else if (key == "POINTS" && vals.size() == 1) points = number(vals[0]), have_points = true;
     else if (key == "DATA" && vals.size() == 1) data = vals[0];
+    else if (key != "VERSION" && key != "VIEWPOINT" && key != "WIDTH" && key != "HEIGHT" && key != "POINTS" &&
+             key != "DATA")
+      bad_file(path, "header line " + std::to_string(lines + 1) + " ('" + line.substr(0, 40) +
+                         "') is not a PCD header field");
   }
   if (data.empty()) bad_file(path, "the header has no DATA line");
   if (!nfields || nsize != nfields || ntype != nfields || (ncount && ncount != nfields))

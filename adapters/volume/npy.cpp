@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "occseg/error.hpp"
+#include "occseg/file_read.hpp"
 #include "occseg/file_write.hpp"
 
 namespace occseg {
@@ -101,11 +102,8 @@ NpyArray parse_npy(const unsigned char* b, std::size_t size, const std::string& 
 }
 
 NpyArray read_npy(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(Status::io, "cannot open '" + path + "': " + std::strerror(errno));
-  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) throw Error(Status::io, "cannot read '" + path + "'");
-  return parse_npy(bytes.data(), bytes.size(), path);
+  const std::string bytes = read_file(path);
+  return parse_npy(reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size(), path);
 }
 
 void write_npy(const std::string& path, const std::string& descr, const std::vector<std::size_t>& shape,

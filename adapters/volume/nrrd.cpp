@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "occseg/error.hpp"
+#include "occseg/file_read.hpp"
 #include "occseg/file_write.hpp"
 
 namespace occseg {
@@ -123,10 +124,7 @@ const char* nrrd_type_name(NrrdType t) {
 }
 
 NrrdVolume read_nrrd(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(Status::io, "cannot open '" + path + "': " + std::strerror(errno));
-  const std::string b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) throw Error(Status::io, "cannot read '" + path + "'");
+  const std::string b = read_file(path);
   if (b.compare(0, 4, "NRRD") != 0) bad(path, "it does not start with NRRD");
   NrrdVolume v;
   bool have_type = false, have_sizes = false, big = false, ascii = false, have_endian = false;
@@ -213,6 +211,11 @@ NrrdVolume read_nrrd(const std::string& path) {
     if (!std::isfinite(o)) bad(path, "space origin is not finite");
   const std::size_t isz = type_size(v.type), n = v.dims.count();
   if (ascii) {
+    // Each sample takes at least two characters (a digit and a separator, the last one may
+    // end the file): a header promising more cannot be honoured, so nothing is allocated for it.
+    if (n > (b.size() - pos + 1) / 2)
+      bad(path, "ascii data ends before " + std::to_string(n) + " samples (the file has " +
+                    std::to_string(b.size() - pos) + " bytes of data)");
     std::istringstream s(b.substr(pos));
     v.data.resize(n * isz);
     for (std::size_t i = 0; i < n; ++i) {

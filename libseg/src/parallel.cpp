@@ -2,6 +2,7 @@
 
 #include <exception>
 #include <mutex>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -33,8 +34,15 @@ void parallel_for(std::size_t n, int threads, const std::function<void(std::size
   };
   std::vector<std::thread> pool;
   pool.reserve(t - 1);
-  for (std::size_t k = 1; k < t; ++k) pool.emplace_back(run, n * k / t, n * (k + 1) / t);
+  // A thread that cannot be started (no memory for its stack, a process limit) is not an
+  // error: its chunk runs here instead. Chunks stay the same, so results do too.
+  std::size_t started = 1;
+  try {
+    for (; started < t; ++started) pool.emplace_back(run, n * started / t, n * (started + 1) / t);
+  } catch (const std::system_error&) {
+  }
   run(0, n / t);
+  for (std::size_t k = started; k < t; ++k) run(n * k / t, n * (k + 1) / t);
   for (auto& th : pool) th.join();
   if (first) std::rethrow_exception(first);
 }

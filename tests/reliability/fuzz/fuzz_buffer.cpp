@@ -1,0 +1,162 @@
+// The C ABI end to end: occseg_map_from_buffer on arbitrary small dims, dtypes, strides (dense,
+// Fortran, flipped, arbitrary and overlapping), flags and values, then occseg_segment with
+// either preset and 1 or 3 threads. An accepted map must come back voxel for voxel, and a
+// result must be a valid labelling: every voxel labelled, counts and states consistent, each
+// segment a maximal 6-connected region of one state, and the same with a different thread count.
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <vector>
+
+#include "occseg/occseg.h"
+
+namespace {
+
+struct Reader {
+  const std::uint8_t* p;
+  std::size_t n;
+  std::uint8_t byte() {
+    if (!n) return 0;
+    --n;
+    return *p++;
+  }
+};
+
+void require(bool ok) {
+  if (!ok) std::abort();
+}
+
+// The probability the library must have stored for one element.
+double expected(const std::uint8_t* e, occseg_dtype t, std::uint32_t flags, bool* reject) {
+  double v;
+  switch (t) {
+    case OCCSEG_F32: { float f; std::memcpy(&f, e, 4); v = f; break; }
+    case OCCSEG_F64: std::memcpy(&v, e, 8); break;
+    case OCCSEG_U8: return e[0] / 255.0;
+    default: { std::uint16_t u; std::memcpy(&u, e, 2); return u / 65535.0; }
+  }
+  if (v >= 0 && v <= 1) return v;
+  if (std::isnan(v) && (flags & OCCSEG_IMPORT_NAN_UNKNOWN)) return 0.5;
+  if (!std::isnan(v) && (flags & OCCSEG_IMPORT_CLAMP)) return v < 0 ? 0.0 : 1.0;
+  *reject = true;
+  return 0;
+}
+
+occseg_result* run(const occseg_map* map, int preset, int threads) {
+  occseg_params* params = nullptr;
+  require(occseg_params_create(&params) == OCCSEG_OK);
+  require(occseg_params_set(params, "preset", preset ? "paper" : "default") == OCCSEG_OK);
+  require(occseg_params_set_int(params, "threads", threads) == OCCSEG_OK);
+  require(occseg_params_set_int(params, "smax", 8) == OCCSEG_OK);  // several blocks even in small maps
+  require(occseg_params_set_int(params, "smin", 2) == OCCSEG_OK);
+  occseg_result* r = nullptr;
+  const int rc = occseg_segment(&r, map, params);
+  occseg_params_free(params);
+  require(rc == OCCSEG_OK && r);
+  return r;
+}
+
+void check_result(const occseg_result* r, const std::size_t d[3], std::vector<std::uint32_t>& labels) {
+  const std::size_t n = d[0] * d[1] * d[2];
+  labels.assign(n, 0);
+  std::vector<std::uint8_t> states(n);
+  require(occseg_result_labels(r, labels.data(), n) == OCCSEG_OK);
+  require(occseg_result_states(r, states.data(), n) == OCCSEG_OK);
+  const std::uint32_t count = occseg_result_segment_count(r);
+  require(count >= 1 && count <= n);
+  std::vector<std::uint64_t> voxels(count, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    require(labels[i] < count);
+    ++voxels[labels[i]];
+  }
+  std::vector<occseg_state> seg_state(count);
+  for (std::uint32_t s = 0; s < count; ++s) {
+    occseg_segment_info info;
+    info.struct_size = sizeof info;
+    require(occseg_result_segment(r, s, &info) == OCCSEG_OK);
+    require(info.id == s && info.voxels == voxels[s] && info.mop >= 0 && info.mop <= 1);
+    seg_state[s] = info.state;
+  }
+  // Maximal 6-connected regions: neighbours share a label exactly when they share a state.
+  for (std::size_t z = 0; z < d[2]; ++z)
+    for (std::size_t y = 0; y < d[1]; ++y)
+      for (std::size_t x = 0; x < d[0]; ++x) {
+        const std::size_t i = x + d[0] * (y + d[1] * z);
+        require(states[i] == seg_state[labels[i]]);
+        const std::size_t next[3] = {x + 1 < d[0] ? i + 1 : i, y + 1 < d[1] ? i + d[0] : i,
+                                     z + 1 < d[2] ? i + d[0] * d[1] : i};
+        for (std::size_t j : next)
+          if (j != i) require((states[i] == states[j]) == (labels[i] == labels[j]));
+      }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  Reader in{data, size};
+  const occseg_dtype dtype = static_cast<occseg_dtype>(in.byte() % 5);  // 4: invalid on purpose
+  std::size_t dims[3];
+  for (std::size_t& v : dims) v = in.byte() % 13;  // 0 .. 12, zero on purpose
+  const std::uint32_t flags = in.byte() % 5;       // 4: invalid on purpose
+  const int mode = in.byte() % 4, preset = in.byte() % 2;
+  const std::size_t item = dtype == OCCSEG_F64 ? 8 : dtype == OCCSEG_F32 ? 4 : dtype == OCCSEG_U16 ? 2 : 1;
+  ptrdiff_t s[3];
+  if (mode == 1) {  // Fortran order
+    s[2] = item; s[1] = s[2] * dims[2]; s[0] = s[1] * dims[1];
+  } else if (mode == 2) {  // C order, every axis flipped
+    s[0] = -ptrdiff_t(item); s[1] = s[0] * ptrdiff_t(dims[0]); s[2] = s[1] * ptrdiff_t(dims[1]);
+  } else {  // arbitrary, possibly overlapping (mode 3), or dense (mode 0: strides == NULL)
+    for (ptrdiff_t& v : s) v = static_cast<std::int8_t>(in.byte());
+  }
+  // Span of the strided view, so the buffer is large enough whatever the library accepts.
+  ptrdiff_t lo = 0, hi = ptrdiff_t(item);
+  const std::size_t dense[3] = {item, item * dims[0], item * dims[0] * dims[1]};
+  for (int k = 0; k < 3; ++k) {
+    const ptrdiff_t step = mode == 0 ? ptrdiff_t(dense[k]) : s[k];
+    const ptrdiff_t last = dims[k] ? step * ptrdiff_t(dims[k] - 1) : 0;
+    (last < 0 ? lo : hi) += last;
+  }
+  std::vector<std::uint8_t> buf(static_cast<std::size_t>(hi - lo));
+  for (std::size_t i = 0; i < buf.size(); ++i) buf[i] = in.byte();
+  const std::uint8_t* origin = buf.data() - lo;
+
+  occseg_map* map = nullptr;
+  const int rc = occseg_map_from_buffer_flags(&map, origin, dtype, dims, mode == 0 ? nullptr : s, 0.5, flags);
+  // Which failures are allowed, and that a valid request is not refused.
+  const std::size_t n = dims[0] * dims[1] * dims[2];
+  if (rc != OCCSEG_OK) {
+    require(!map && std::strlen(occseg_last_error()) > 0);
+    require(rc == OCCSEG_EINVAL || rc == OCCSEG_EDIMS || rc == OCCSEG_EVALUE);
+    if (rc == OCCSEG_EDIMS) require(n == 0);
+    // Dense, Fortran and flipped views are valid; only arbitrary strides may overlap.
+    if (rc == OCCSEG_EINVAL) require(dtype > OCCSEG_U16 || flags > 3 || mode == 3);
+    if (rc == OCCSEG_EVALUE) require((dtype == OCCSEG_F32 || dtype == OCCSEG_F64) && flags != 3);
+    return 0;
+  }
+  require(map && dtype <= OCCSEG_U16 && flags <= 3 && n > 0);
+  // Every voxel as the caller's buffer says.
+  std::vector<float> values(n);
+  require(occseg_map_values(map, values.data(), n) == OCCSEG_OK);
+  const ptrdiff_t* st = mode == 0 ? nullptr : s;
+  for (std::size_t z = 0; z < dims[2]; ++z)
+    for (std::size_t y = 0; y < dims[1]; ++y)
+      for (std::size_t x = 0; x < dims[0]; ++x) {
+        const ptrdiff_t off = st ? ptrdiff_t(x) * st[0] + ptrdiff_t(y) * st[1] + ptrdiff_t(z) * st[2]
+                                 : ptrdiff_t(item * (x + dims[0] * (y + dims[1] * z)));
+        bool reject = false;
+        const double want = expected(origin + off, dtype, flags, &reject);
+        require(!reject);  // the library accepted a value it should have refused
+        require(values[x + dims[0] * (y + dims[1] * z)] == static_cast<float>(want));
+      }
+  std::vector<std::uint32_t> one, three;
+  occseg_result* r1 = run(map, preset, 1);
+  check_result(r1, dims, one);
+  occseg_result* r3 = run(map, preset, 3);
+  check_result(r3, dims, three);
+  require(one == three);  // results never depend on the thread count
+  occseg_result_free(r1);
+  occseg_result_free(r3);
+  occseg_map_free(map);
+  return 0;
+}

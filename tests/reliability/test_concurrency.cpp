@@ -1,0 +1,217 @@
+// Concurrent use of the C ABI (run under ThreadSanitizer too): separate handles in separate
+// threads, one map and one parameter set shared by readers, per-thread error texts, the
+// progress callback's thread, and concurrent writers of one output path.
+#include <atomic>
+#include <cstring>
+#include <thread>
+
+#include "support.hpp"
+
+using namespace occseg::reliability;
+
+namespace {
+
+constexpr int kThreads = 8;
+constexpr std::size_t kN = 40;
+
+// A map of noisy blobs that differs with the seed.
+std::vector<float> blobs(unsigned seed) {
+  std::vector<float> p(kN * kN * kN);
+  std::uint32_t s = seed * 2654435761u + 1;
+  auto rnd = [&] { return (s = s * 1664525u + 1013904223u) >> 8; };
+  const int cx = 8 + rnd() % 24, cy = 8 + rnd() % 24, cz = 8 + rnd() % 24, r = 4 + rnd() % 6;
+  for (std::size_t z = 0; z < kN; ++z)
+    for (std::size_t y = 0; y < kN; ++y)
+      for (std::size_t x = 0; x < kN; ++x) {
+        const int dx = int(x) - cx, dy = int(y) - cy, dz = int(z) - cz;
+        const bool in = dx * dx + dy * dy + dz * dz < r * r || (z < 3 && x > kN / 2);
+        const float noise = float(rnd() % 1000) / 20000.0f;  // 0 .. 0.05
+        p[x + kN * (y + kN * z)] = in ? 0.9f - noise : (y > 34 ? 0.5f : 0.1f + noise);
+      }
+  return p;
+}
+
+struct Output {
+  std::vector<std::uint32_t> labels;
+  std::vector<occseg_segment_info> segments;
+  bool operator==(const Output& o) const {
+    if (labels != o.labels || segments.size() != o.segments.size()) return false;
+    for (std::size_t i = 0; i < segments.size(); ++i)
+      if (std::memcmp(&segments[i], &o.segments[i], sizeof segments[i]) != 0) return false;
+    return true;
+  }
+};
+
+Output collect(const occseg_result* r) {
+  Output o;
+  o.labels.resize(kN * kN * kN);
+  EXPECT_EQ(occseg_result_labels(r, o.labels.data(), o.labels.size()), OCCSEG_OK);
+  for (std::uint32_t i = 0; i < occseg_result_segment_count(r); ++i) {
+    occseg_segment_info s;
+    std::memset(&s, 0, sizeof s);  // padding too, for memcmp
+    s.struct_size = sizeof s;
+    EXPECT_EQ(occseg_result_segment(r, i, &s), OCCSEG_OK);
+    o.segments.push_back(s);
+  }
+  return o;
+}
+
+// Segments `map` with the default preset and `threads` worker threads.
+Output segment(const occseg_map* map, int threads) {
+  occseg_params* params = nullptr;
+  EXPECT_EQ(occseg_params_create(&params), OCCSEG_OK);
+  EXPECT_EQ(occseg_params_set_int(params, "threads", threads), OCCSEG_OK);
+  occseg_result* r = nullptr;
+  EXPECT_EQ(occseg_segment(&r, map, params), OCCSEG_OK) << occseg_last_error();
+  Output o = r ? collect(r) : Output{};
+  occseg_result_free(r);
+  occseg_params_free(params);
+  return o;
+}
+
+occseg_map* make_map(unsigned seed) {
+  const std::vector<float> p = blobs(seed);
+  const std::size_t d[3] = {kN, kN, kN};
+  occseg_map* m = nullptr;
+  EXPECT_EQ(occseg_map_from_buffer(&m, p.data(), OCCSEG_F32, d, nullptr, 0.05), OCCSEG_OK);
+  return m;
+}
+
+}  // namespace
+
+TEST(Concurrency, EightSegmentationsInParallelMatchTheSerialResults) {
+  std::vector<occseg_map*> maps;
+  std::vector<Output> serial;
+  for (int i = 0; i < kThreads; ++i) {
+    maps.push_back(make_map(i));
+    serial.push_back(segment(maps[i], 1));
+    ASSERT_GT(serial[i].segments.size(), 1u);
+  }
+  ASSERT_FALSE(serial[0] == serial[1]);  // the maps differ, so a mix-up would show
+  std::vector<Output> parallel(kThreads);
+  std::vector<std::thread> pool;
+  // Each thread builds its own map, parameters and result from scratch, and uses 2 workers.
+  for (int i = 0; i < kThreads; ++i)
+    pool.emplace_back([&, i] {
+      occseg_map* m = make_map(i);
+      parallel[i] = segment(m, 2);
+      occseg_map_free(m);
+    });
+  for (auto& t : pool) t.join();
+  for (int i = 0; i < kThreads; ++i) EXPECT_TRUE(parallel[i] == serial[i]) << "map " << i;
+  for (occseg_map* m : maps) occseg_map_free(m);
+}
+
+TEST(Concurrency, OneMapAndOneParameterSetReadByEightThreads) {
+  occseg_map* map = make_map(42);
+  occseg_params* params = nullptr;
+  ASSERT_EQ(occseg_params_create(&params), OCCSEG_OK);
+  ASSERT_EQ(occseg_params_set(params, "preset", "paper"), OCCSEG_OK);
+  occseg_result* first = nullptr;
+  ASSERT_EQ(occseg_segment(&first, map, params), OCCSEG_OK);
+  const Output want = collect(first);
+  std::vector<Output> got(kThreads);
+  std::vector<std::thread> pool;
+  for (int i = 0; i < kThreads; ++i)
+    pool.emplace_back([&, i] {
+      occseg_result* r = nullptr;
+      EXPECT_EQ(occseg_segment(&r, map, params), OCCSEG_OK);
+      got[i] = collect(r);
+      // Reading one result from many threads is allowed too.
+      std::size_t d[3];
+      EXPECT_EQ(occseg_result_dims(first, d), OCCSEG_OK);
+      EXPECT_EQ(occseg_result_segment_count(first), want.segments.size());
+      occseg_result_free(r);
+    });
+  for (auto& t : pool) t.join();
+  for (int i = 0; i < kThreads; ++i) EXPECT_TRUE(got[i] == want) << "thread " << i;
+  occseg_result_free(first);
+  occseg_params_free(params);
+  occseg_map_free(map);
+}
+
+TEST(Concurrency, LastErrorIsPerThread) {
+  std::atomic<int> ready{0};
+  std::vector<std::string> seen(kThreads);
+  std::vector<std::thread> pool;
+  for (int i = 0; i < kThreads; ++i)
+    pool.emplace_back([&, i] {
+      occseg_params* p = nullptr;
+      EXPECT_EQ(occseg_params_create(&p), OCCSEG_OK);
+      const std::string name = "no_such_parameter_" + std::to_string(i);
+      EXPECT_EQ(occseg_params_set(p, name.c_str(), "1"), OCCSEG_EINVAL);
+      // Wait until every thread has failed, then read: each must still see its own text.
+      ready.fetch_add(1);
+      while (ready.load() < kThreads) std::this_thread::yield();
+      seen[i] = occseg_last_error();
+      occseg_params_free(p);
+    });
+  for (auto& t : pool) t.join();
+  for (int i = 0; i < kThreads; ++i)
+    EXPECT_NE(seen[i].find("no_such_parameter_" + std::to_string(i) + "'"), std::string::npos) << seen[i];
+}
+
+namespace {
+struct Calls {
+  std::thread::id caller;
+  std::atomic<int> wrong{0}, calls{0};
+};
+int on_progress(const char*, double, void* user) {
+  auto* c = static_cast<Calls*>(user);
+  c->calls.fetch_add(1);
+  if (std::this_thread::get_id() != c->caller) c->wrong.fetch_add(1);
+  return 0;
+}
+}  // namespace
+
+TEST(Concurrency, ProgressIsReportedOnTheCallingThread) {
+  occseg_map* map = make_map(7);
+  std::vector<std::thread> pool;
+  std::vector<Calls> calls(4);
+  for (int i = 0; i < 4; ++i)
+    pool.emplace_back([&, i] {
+      calls[i].caller = std::this_thread::get_id();
+      occseg_params* p = nullptr;
+      EXPECT_EQ(occseg_params_create(&p), OCCSEG_OK);
+      EXPECT_EQ(occseg_params_set_int(p, "threads", 3), OCCSEG_OK);
+      EXPECT_EQ(occseg_params_set_progress(p, on_progress, &calls[i]), OCCSEG_OK);
+      occseg_result* r = nullptr;
+      EXPECT_EQ(occseg_segment(&r, map, p), OCCSEG_OK);
+      occseg_result_free(r);
+      occseg_params_free(p);
+    });
+  for (auto& t : pool) t.join();
+  for (const Calls& c : calls) {
+    EXPECT_GE(c.calls.load(), 10);  // five stages, each begun and ended
+    EXPECT_EQ(c.wrong.load(), 0);
+  }
+  occseg_map_free(map);
+}
+
+TEST(Concurrency, WritersOfOnePathNeverMixTheirFiles) {
+  // Eight threads write eight different maps to one path at once: the file that remains is
+  // exactly one of them, never a mixture, and no temporary file is left.
+  const std::string dir = scratch("same_path");
+  const std::string path = dir + "/map.npy";
+  std::vector<occseg_map*> maps;
+  for (int i = 0; i < kThreads; ++i) maps.push_back(make_map(100 + i));
+  for (int round = 0; round < 3; ++round) {
+    std::vector<std::thread> pool;
+    for (int i = 0; i < kThreads; ++i)
+      pool.emplace_back([&, i] { EXPECT_EQ(occseg_map_write(maps[i], path.c_str()), OCCSEG_OK) << occseg_last_error(); });
+    for (auto& t : pool) t.join();
+    occseg_map* back = nullptr;
+    ASSERT_EQ(occseg_map_read(&back, path.c_str()), OCCSEG_OK) << occseg_last_error();
+    std::vector<float> got(kN * kN * kN), want(kN * kN * kN);
+    ASSERT_EQ(occseg_map_values(back, got.data(), got.size()), OCCSEG_OK);
+    int matches = 0;
+    for (occseg_map* m : maps) {
+      ASSERT_EQ(occseg_map_values(m, want.data(), want.size()), OCCSEG_OK);
+      matches += got == want;
+    }
+    EXPECT_EQ(matches, 1) << "round " << round;
+    occseg_map_free(back);
+    EXPECT_EQ(entries(dir), std::vector<std::string>{"map.npy"});
+  }
+  for (occseg_map* m : maps) occseg_map_free(m);
+}
