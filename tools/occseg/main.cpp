@@ -75,7 +75,9 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e) == 0 ? kOk : kUsage;
   } catch (const CLI::ParseError& e) {
-    std::cerr << "occseg: usage error: " << one_line(e.what()) << " (see occseg --help)\n";
+    std::string help = "occseg";  // point at the help of the subcommand being parsed, if any
+    for (const CLI::App* sub : app.get_subcommands()) help += " " + sub->get_name();
+    std::cerr << "occseg: usage error: " << one_line(e.what()) << " (see " << help << " --help)\n";
     return kUsage;
   }
   try {

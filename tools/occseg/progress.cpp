@@ -57,48 +57,68 @@ void check_interrupted() {
 bool stderr_is_terminal() { return ::isatty(STDERR_FILENO) == 1; }
 
 ProgressBar::ProgressBar(bool enabled, double delay)
-    : enabled_(enabled), delay_(delay), start_(std::chrono::steady_clock::now()) {}
+    : enabled_(enabled), delay_(delay), start_(std::chrono::steady_clock::now()) {
+  if (enabled_) ticker_ = std::thread([this] { tick(); });
+}
 
-ProgressBar::~ProgressBar() { clear(); }
+ProgressBar::~ProgressBar() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  wake_.notify_all();
+  if (ticker_.joinable()) ticker_.join();
+  clear();
+}
 
 double ProgressBar::elapsed() const {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
 }
 
+void ProgressBar::tick() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (!stop_) {
+    wake_.wait_for(lock, std::chrono::milliseconds(100));
+    if (!stop_ && active_ && elapsed() >= delay_) draw_locked();
+  }
+}
+
 bool ProgressBar::update(const std::string& label, double fraction) {
   if (g_signal) return false;
   if (!enabled_) return true;
-  const double t = elapsed();
-  if (t < delay_) return true;
   std::lock_guard<std::mutex> lock(mutex_);
-  // At most ten redraws a second, but always on a new phase.
-  if (label == last_label_ && t - last_draw_ < 0.1 && fraction < 1.0) return true;
-  draw(label, fraction, t);
-  last_draw_ = t;
-  last_label_ = label;
+  label_ = label;
+  fraction_ = fraction;
+  active_ = true;
+  // A new phase shows at once; otherwise the ticker redraws (at most ten times a second).
+  if (label != drawn_label_ && elapsed() >= delay_) draw_locked();
   return !g_signal;
 }
 
-void ProgressBar::draw(const std::string& label, double fraction, double seconds) {
-  fraction = std::clamp(fraction, 0.0, 1.0);
+void ProgressBar::draw_locked() {
+  if (!enabled_) return;
+  const double seconds = elapsed();
+  const double fraction = std::clamp(fraction_, 0.0, 1.0);
   const int width = 30, filled = static_cast<int>(fraction * width + 0.5);
   char tail[48];
   std::snprintf(tail, sizeof tail, "] %3d%%  %.1f s", static_cast<int>(fraction * 100 + 0.5), seconds);
-  std::string line = "occseg: " + label + " [" + std::string(filled, '#') + std::string(width - filled, '.') + tail;
+  std::string line = "occseg: " + label_ + " [" + std::string(filled, '#') + std::string(width - filled, '.') + tail;
   const std::size_t max = static_cast<std::size_t>(terminal_width() - 1);
   if (line.size() > max) line.resize(max);
   line = "\r" + line + "\033[K";
   if (::write(STDERR_FILENO, line.data(), line.size()) < 0) enabled_ = false;
   drawn_ = true;
+  drawn_label_ = label_;
 }
 
 void ProgressBar::clear() {
   std::lock_guard<std::mutex> lock(mutex_);
+  active_ = false;
+  drawn_label_.clear();
   if (!drawn_) return;
   static const char erase[] = "\r\033[K";
   if (::write(STDERR_FILENO, erase, sizeof erase - 1) < 0) enabled_ = false;
   drawn_ = false;
-  last_label_.clear();
 }
 
 std::function<bool(const char*, double)> ProgressBar::segment_callback() {

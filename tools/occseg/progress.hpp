@@ -5,9 +5,11 @@
 #pragma once
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <functional>
 #include <mutex>
 #include <string>
+#include <thread>
 
 namespace occseg::cli {
 
@@ -26,6 +28,8 @@ class ProgressBar {
  public:
   // Draws only when `enabled` (the commands pass: stderr is a terminal and not --quiet) and the
   // job has lasted longer than `delay_seconds` since construction, so short jobs stay silent.
+  // A ticker thread redraws the last reported state ten times a second, so the bar appears on
+  // time and its clock runs during steps that report nothing (reading a file, writing).
   explicit ProgressBar(bool enabled, double delay_seconds = 0.5);
   ~ProgressBar();
   ProgressBar(const ProgressBar&) = delete;
@@ -39,19 +43,26 @@ class ProgressBar {
   std::function<bool(const char* stage, double fraction)> segment_callback();
   // Callback for ScanOptions::progress and ScanConfig::progress, under `label`.
   std::function<bool(double fraction)> callback(const std::string& label);
-  // Erases the bar, if drawn (before printing to the terminal, and at the end).
+  // Erases the bar, if drawn, and keeps it away until the next update (before printing to the
+  // terminal, and at the end).
   void clear();
   double elapsed() const;
 
  private:
-  void draw(const std::string& label, double fraction, double seconds);
+  void draw_locked();  // with mutex_ held
+  void tick();
   std::atomic<bool> enabled_;
   double delay_;
   std::chrono::steady_clock::time_point start_;
-  double last_draw_ = -1;
-  std::string last_label_;
+  std::string label_;         // the last reported state...
+  double fraction_ = 0;
+  bool active_ = false;       // ...shown until clear()
+  std::string drawn_label_;
   bool drawn_ = false;
+  bool stop_ = false;
   std::mutex mutex_;
+  std::condition_variable wake_;
+  std::thread ticker_;
 };
 
 }  // namespace occseg::cli

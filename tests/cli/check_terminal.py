@@ -1,0 +1,94 @@
+"""`occseg` in a terminal session (a pseudo-terminal, as a user's shell gives it): a long job
+draws a progress bar on stderr; without a terminal, or with --quiet, there is none; Ctrl-C (the
+terminal's interrupt character) and SIGTERM stop the job with exit code 130 / 143 and leave no
+output file behind."""
+import glob
+import os
+import pty
+import re
+import select
+import signal
+import subprocess
+import sys
+import time
+
+occseg, work = sys.argv[1], sys.argv[2]
+BAR = re.compile(r"occseg: [\w .:-]+ \[[#.]{30}\] +\d+%  [\d.]+ s\x1b\[K")
+
+
+def in_terminal(args, interrupt=None, when="", deadline=300):
+    """Runs occseg with stdin, stdout and stderr on a new pseudo-terminal (its controlling
+    terminal). interrupt: None, b"\\x03" (typed Ctrl-C) or a signal number, sent once the progress
+    bar shows with `when` in its label. Returns (exit code, everything the terminal received)."""
+    pid, fd = pty.fork()
+    if pid == 0:
+        os.chdir(work)
+        os.execv(occseg, [occseg, *args])
+    seen, sent, end = b"", False, time.time() + deadline
+    while time.time() < end:
+        ready, _, _ = select.select([fd], [], [], 1.0)
+        if not ready:
+            continue
+        try:
+            chunk = os.read(fd, 65536)
+        except OSError:  # EIO: the child closed the terminal
+            break
+        if not chunk:
+            break
+        seen += chunk
+        if interrupt is not None and not sent and any(when in b for b in BAR.findall(seen.decode(errors="replace"))):
+            if isinstance(interrupt, bytes):
+                os.write(fd, interrupt)
+            else:
+                os.kill(pid, interrupt)
+            sent = True
+    else:
+        os.kill(pid, signal.SIGKILL)
+        raise AssertionError(f"{args}: no end within {deadline} s; got {seen[-500:]!r}")
+    _, status = os.waitpid(pid, 0)
+    os.close(fd)
+    assert interrupt is None or sent, f"{args}: the bar never showed, so nothing was interrupted: {seen!r}"
+    return os.waitstatus_to_exitcode(status), seen.decode(errors="replace")
+
+
+# A long job (seconds: the bar shows after 0.5 s): the cone scene in a 320 x 320 x 256 map,
+# segmented on one thread; reading, segmenting and writing each take a good part of a second.
+r = subprocess.run([occseg, "simulate", "--scene", "cone", "--dims", "320", "320", "256", "--out", "sim"], cwd=work,
+                   capture_output=True, text=True)
+assert r.returncode == 0, r.stderr
+job = ["segment", "sim/map.npy", "--voxel-size", "0.04", "--threads", "1"]
+
+code, text = in_terminal(job + ["--out", "seg"])
+assert code == 0, (code, text)
+bars = BAR.findall(text)
+assert bars and any("segmenting: " in b or "writing " in b for b in bars), text
+assert "\r" in text and "written: seg/labels.npy" in text, text
+assert sorted(os.listdir(os.path.join(work, "seg"))) == ["labels.npy", "labels.nrrd", "segmentation.png", "segments.json"]
+
+# No terminal (pipes), or --quiet: no bar, nothing on stderr.
+r = subprocess.run([occseg, *job, "--out", "seg_pipe"], cwd=work, capture_output=True, text=True)
+assert r.returncode == 0 and r.stderr == "" and "\r" not in r.stdout, r.stderr
+code, text = in_terminal(job + ["--out", "seg_quiet", "--quiet"])
+assert code == 0 and text == "", (code, text)
+
+# Ctrl-C typed in the terminal during the segmentation: it stops at the next stage (or, should
+# the segmentation be over by then, after the file being written): exit 130, one message, no
+# output left.
+code, text = in_terminal(job + ["--out", "seg_int"], interrupt=b"\x03", when="segmenting: ")
+assert code == 130, (code, text)
+assert "occseg: interrupted: stopped, and the output files written so far were removed" in text, text
+assert not os.path.exists(os.path.join(work, "seg_int")), os.listdir(os.path.join(work, "seg_int"))
+
+# The same into an existing directory: it stays, and so does what was in it before.
+os.makedirs(os.path.join(work, "keep"))
+with open(os.path.join(work, "keep", "notes.txt"), "w") as f:
+    f.write("mine\n")
+code, text = in_terminal(job + ["--out", "keep"], interrupt=b"\x03", when="segmenting: ")
+assert code == 130 and os.listdir(os.path.join(work, "keep")) == ["notes.txt"], (code, os.listdir(os.path.join(work, "keep")))
+
+# The demo, stopped by SIGTERM while it simulates or segments: exit 143, no occseg-out.
+code, text = in_terminal(["demo", "--threads", "1"], interrupt=signal.SIGTERM)
+assert code == 143 and "occseg: terminated" in text, (code, text)
+assert not os.path.exists(os.path.join(work, "occseg-out"))
+assert not glob.glob(os.path.join(work, "**", "*.tmp-*"), recursive=True)
+print("cli terminal: all checks passed")
