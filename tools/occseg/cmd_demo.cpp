@@ -162,7 +162,8 @@ int run(const DemoArgs& o) {
             << "  segmentation.png   slices through the map, the segments and the ideal state\n"
             << "  segments.json      the segment table: state, voxels, mean probability, box, centroid\n"
             << "  labels.npy         segment id per voxel, uint32 [z, y, x]; labels.nrrd for ParaView/3D Slicer\n"
-            << "  map.npy            the simulated map, float32 [z, y, x]: try `occseg segment " << d << "map.npy`\n"
+            << "  map.npy            the simulated map, float32 [z, y, x]: try `occseg segment " << d
+            << "map.npy --voxel-size " << o.voxel_size << " --out seg`\n"
             << "  truth_state.npy    the ideal state per voxel; truth_objects.npy, scene.json: the scene\n"
             << "  evaluation.txt     scores against the ground truth (evaluation.json: the same as JSON)\n"
             << "  summary.json       this summary as JSON\n"
