@@ -184,13 +184,13 @@ inline std::uint8_t plane_window(std::uint8_t* cur, const std::uint8_t* ocur, st
   const std::uint8_t s = cur[x];
   win[0] = ocur + static_cast<std::ptrdiff_t>(x);  // the boundary voxel itself always belongs
   int n = 1;
-  while (n < look && k + n < rows && cur[x + n * rs] == s) {
+  while (n < look && k + n < rows && cur[static_cast<std::ptrdiff_t>(x) + n * rs] == s) {
     win[n] = ocur + static_cast<std::ptrdiff_t>(x) + n * rs;
     ++n;
   }
   classify_own(win, n, a, re);
   for (int w = 0; w < n; ++w)
-    if (re[w]) cur[x + w * rs] = a;
+    if (re[w]) cur[static_cast<std::ptrdiff_t>(x) + w * rs] = a;
   return static_cast<std::uint8_t>(n - 1);  // resume after the window
 }
 

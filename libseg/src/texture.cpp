@@ -85,7 +85,7 @@ inline void contrast_row_impl(const float* p, const std::ptrdiff_t* off, std::si
     float s1 = 0, s0 = 0, n1 = 0, n0 = 0;
 #define OCCSEG_NB(K, O)                         \
   if (Present & (1u << K)) {                    \
-    const float v = p[x + O];                   \
+    const float v = p[std::ptrdiff_t(x) + O];   \
     const bool up = v >= c;                     \
     s1 += up ? v : 0.0f;                        \
     s0 += up ? 0.0f : v;                        \
@@ -122,7 +122,7 @@ inline void lbp_row_impl(const float* p, const std::ptrdiff_t* off, std::size_t 
     const float c = p[x];
     std::uint8_t l = 0;
 #define OCCSEG_BIT(K, O) \
-  if (Present & (1u << K)) l |= p[x + O] >= c ? std::uint8_t(1u << K) : std::uint8_t(0);
+  if (Present & (1u << K)) l |= p[std::ptrdiff_t(x) + O] >= c ? std::uint8_t(1u << K) : std::uint8_t(0);
     OCCSEG_BIT(0, o0) OCCSEG_BIT(1, o1) OCCSEG_BIT(2, o2) OCCSEG_BIT(3, o3) OCCSEG_BIT(4, o4) OCCSEG_BIT(5, o5)
 #undef OCCSEG_BIT
     out[x] = l;

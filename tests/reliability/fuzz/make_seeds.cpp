@@ -85,7 +85,7 @@ std::string buffer(std::uint8_t dtype, std::uint8_t n, std::uint8_t mode) {
     const bool inside = i % n > 1 && i % n < n - 1 && (i / n) % n > 1 && (i / n) % n < n - 1;
     const float p = inside ? 0.9f : 0.1f;
     if (dtype == 0) s.append(reinterpret_cast<const char*>(&p), 4);
-    else s.push_back(static_cast<char>(p * 255));
+    else s.push_back(static_cast<char>(static_cast<std::uint8_t>(p * 255)));
   }
   return s;
 }
