@@ -215,3 +215,44 @@ TEST(Concurrency, WritersOfOnePathNeverMixTheirFiles) {
   }
   for (occseg_map* m : maps) occseg_map_free(m);
 }
+
+#ifdef OCCSEG_BROKEN_PLUGINS
+TEST(Concurrency, PluginsLoadWhileOtherThreadsSegmentAndEnumerate) {
+  // Loading is documented as safe while other threads segment and enumerate: one thread loads
+  // plugins (broken ones, which must fail and leave the registry unchanged, and a working
+  // reader plugin where this build has one) while four threads segment and one enumerates.
+  occseg_map* map = make_map(3);
+  const Output want = segment(map, 1);
+  const std::uint32_t before = occseg_plugin_count();
+  std::atomic<bool> done{false};
+  std::vector<std::thread> pool;
+  std::vector<Output> got(4);
+  for (int i = 0; i < 4; ++i) pool.emplace_back([&, i] { got[i] = segment(map, 2); });
+  pool.emplace_back([&] {
+    while (!done.load()) {
+      const std::uint32_t n = occseg_plugin_count();
+      for (std::uint32_t k = 0; k < n; ++k) EXPECT_NE(occseg_plugin_name(k), nullptr);
+      for (std::uint32_t k = 0; k < occseg_param_count(); ++k) EXPECT_NE(occseg_param_name(k), nullptr);
+    }
+  });
+  int failures = 0;
+  for (const char* b : {"register_fails", "duplicate_stage", "abi_major", "no_entry"}) {
+    const std::string path = std::string(OCCSEG_BROKEN_PLUGINS) + "/" + b + ".so";
+    const int rc = occseg_plugins_load(path.c_str());
+    failures += rc == OCCSEG_EPLUGIN;
+    EXPECT_NE(std::string(occseg_last_error()).find(b), std::string::npos) << occseg_last_error();
+  }
+  std::uint32_t loaded = 0;
+#ifdef OCCSEG_READER_PLUGIN
+  EXPECT_EQ(occseg_plugins_load(OCCSEG_READER_PLUGIN), OCCSEG_OK) << occseg_last_error();
+  loaded = 1;
+#endif
+  for (int i = 0; i < 4; ++i) pool[i].join();
+  done = true;
+  pool[4].join();
+  EXPECT_EQ(failures, 4);
+  EXPECT_GE(occseg_plugin_count(), before + loaded);
+  for (int i = 0; i < 4; ++i) EXPECT_TRUE(got[i] == want) << "thread " << i;
+  occseg_map_free(map);
+}
+#endif
