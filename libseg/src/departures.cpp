@@ -123,6 +123,48 @@ std::vector<std::uint8_t> unknown_regions(const std::vector<std::uint8_t>& own, 
   return m;
 }
 
+namespace {
+
+// Rule 3 carried through whole gaps: every gap voxel the texture calls free that is 6-connected,
+// through gap voxels, to a gap voxel touching an occupied voxel becomes unknown. The unobserved
+// inside of a thin structure (a table top seen only edge-on) is such a gap; without this it would
+// be labelled free everywhere but along its rim. The result is a set (connected components), so it
+// does not depend on visiting order.
+void flood_gaps_from_objects(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own,
+                             const std::vector<std::uint8_t>& region, const Dims& d) {
+  const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, sz = nx * ny;
+  auto gap = [&](std::size_t i) { return own[i] == kUnknown && !region[i]; };
+  std::vector<std::size_t> queue;
+  for (std::size_t z = 0, i = 0; z < nz; ++z)
+    for (std::size_t y = 0; y < ny; ++y)
+      for (std::size_t x = 0; x < nx; ++x, ++i) {
+        if (st[i] != kUnknown || !gap(i)) continue;
+        const bool touches = (x > 0 && own[i - 1] == kOccupied) || (x + 1 < nx && own[i + 1] == kOccupied) ||
+                             (y > 0 && own[i - nx] == kOccupied) || (y + 1 < ny && own[i + nx] == kOccupied) ||
+                             (z > 0 && own[i - sz] == kOccupied) || (z + 1 < nz && own[i + sz] == kOccupied);
+        if (touches) queue.push_back(i);
+      }
+  while (!queue.empty()) {
+    const std::size_t i = queue.back();
+    queue.pop_back();
+    const std::size_t x = i % nx, y = (i / nx) % ny, z = i / sz;
+    auto visit = [&](std::size_t j) {
+      if (st[j] == kFree && gap(j)) {
+        st[j] = kUnknown;
+        queue.push_back(j);
+      }
+    };
+    if (x > 0) visit(i - 1);
+    if (x + 1 < nx) visit(i + 1);
+    if (y > 0) visit(i - nx);
+    if (y + 1 < ny) visit(i + nx);
+    if (z > 0) visit(i - sz);
+    if (z + 1 < nz) visit(i + sz);
+  }
+}
+
+}  // namespace
+
 void apply_voxel_rules(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
                        const Params& params) {
   const std::vector<std::uint8_t> region = unknown_regions(own, d, params);
@@ -138,6 +180,7 @@ void apply_voxel_rules(std::vector<std::uint8_t>& st, const std::vector<std::uin
                   z > 0 ? o - sz : none.data(), z + 1 < nz ? o + sz : none.data(), nx);
       }
   });
+  flood_gaps_from_objects(st, own, region, d);
 }
 
 std::vector<std::uint8_t> unknown_regions(const Grid& g, const Params& params) {

@@ -46,3 +46,23 @@ TEST(Departures, VoxelRules) {
   apply_voxel_rules(so, g, prm);
   EXPECT_EQ(so, (std::vector<std::uint8_t>{2, 2, 0, 2, 0}));
 }
+
+TEST(Departures, GapConnectedToAnObjectIsNeverFree) {
+  // A table top seen only edge-on: a 2-voxel-thick slab of 0.5 (too thin to be an unknown region)
+  // with free space above and below and an occupied rim at x = 2. Texture says free everywhere.
+  Grid g(Dims{30, 12, 12}, 0.2f);
+  for (int z = 5; z < 7; ++z)
+    for (int y = 0; y < 12; ++y) {
+      g.at(2, y, z) = 0.9f;
+      for (int x = 3; x < 28; ++x) g.at(x, y, z) = 0.5f;
+    }
+  // A separate ray gap in free space, touching nothing occupied.
+  for (int y = 0; y < 12; ++y) g.at(15, y, 10) = 0.5f;
+  std::vector<std::uint8_t> st(g.p.size(), 0);
+  apply_voxel_rules(st, g, Params());
+  for (int y = 0; y < 12; ++y) {
+    EXPECT_EQ(st[g.index(3, y, 5)], 1) << "touches the rim";
+    EXPECT_EQ(st[g.index(27, y, 6)], 1) << "25 voxels from the rim, same gap";
+    EXPECT_EQ(st[g.index(15, y, 10)], 0) << "a gap between rays stays free";
+  }
+}

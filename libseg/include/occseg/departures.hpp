@@ -19,9 +19,10 @@ std::vector<std::uint8_t> unknown_regions(const Grid& grid, const Params& params
 //  - own state free or occupied: that state (an occupied voxel is never free; a voxel seen free
 //    is free);
 //  - at 0.5 inside an unknown region: unknown;
-//  - at 0.5 in a gap: the state the texture segmentation gave it, except that a gap voxel that the
-//    texture calls free but that touches an occupied voxel becomes unknown (a hole in an object's
-//    shell is not a way through).
+//  - at 0.5 in a gap: the state the texture segmentation gave it, except that a gap voxel that
+//    touches an occupied voxel, and every free gap voxel connected to it through gap voxels,
+//    becomes unknown (a hole in an object's shell, or the unobserved inside of a thin structure,
+//    is not a way through).
 void apply_voxel_rules(std::vector<std::uint8_t>& states, const Grid& grid, const Params& params);
 
 // The same two with the voxels' own states (own_states() of refine.hpp) already computed.

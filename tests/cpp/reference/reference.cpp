@@ -332,6 +332,32 @@ void apply_voxel_rules(std::vector<std::uint8_t>& st, const Grid& g, const Param
           if (touches) st[i] = kUnknown;
         }
       }
+  // Gaps connected to an object: seeds are gap voxels left unknown that touch an occupied voxel;
+  // free gap voxels next to a marked one are marked, sweep after sweep, until nothing changes.
+  auto gap = [&](std::size_t i) { return params.state_of(p[i]) == State::unknown && !region[i]; };
+  auto occ = [&](std::size_t i) { return p[i] > hi; };
+  std::vector<std::uint8_t> mark(st.size(), 0);
+  for (std::size_t z = 0, i = 0; z < nz; ++z)
+    for (std::size_t y = 0; y < ny; ++y)
+      for (std::size_t x = 0; x < nx; ++x, ++i)
+        mark[i] = st[i] == kUnknown && gap(i) &&
+                  ((x > 0 && occ(i - 1)) || (x + 1 < nx && occ(i + 1)) || (y > 0 && occ(i - nx)) ||
+                   (y + 1 < ny && occ(i + nx)) || (z > 0 && occ(i - sz)) || (z + 1 < nz && occ(i + sz)));
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (std::size_t z = 0, i = 0; z < nz; ++z)
+      for (std::size_t y = 0; y < ny; ++y)
+        for (std::size_t x = 0; x < nx; ++x, ++i) {
+          if (mark[i] || st[i] != kFree || !gap(i)) continue;
+          if ((x > 0 && mark[i - 1]) || (x + 1 < nx && mark[i + 1]) || (y > 0 && mark[i - nx]) ||
+              (y + 1 < ny && mark[i + nx]) || (z > 0 && mark[i - sz]) || (z + 1 < nz && mark[i + sz])) {
+            mark[i] = 1;
+            changed = true;
+          }
+        }
+  }
+  for (std::size_t i = 0; i < st.size(); ++i)
+    if (mark[i]) st[i] = kUnknown;
 }
 
 void label(const std::vector<std::uint8_t>& st, const Grid& g, std::vector<std::uint32_t>& labels,
