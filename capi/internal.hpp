@@ -1,10 +1,12 @@
 // Shared by the capi/*.cpp files: the structs behind the opaque handles and the one place that
 // turns C++ exceptions into status codes, so no exception ever crosses the C ABI.
 #pragma once
+#include <cstring>
 #include <exception>
 #include <new>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "occseg/error.hpp"
 #include "occseg/grid.hpp"
@@ -33,6 +35,15 @@ namespace occseg::capi {
 void clear_error() noexcept;
 // Sets the error to "function: prefix message" and returns `code`.
 int fail(const char* function, int code, const char* message, const char* prefix = "") noexcept;
+
+// The value a C caller passed for an enum parameter. C may pass any int there, and reading an
+// out-of-range value as the C++ enum type is undefined, so the bytes are read as the integer.
+template <class E>
+int enum_value(const E& e) noexcept {
+  std::underlying_type_t<E> v;
+  std::memcpy(&v, &e, sizeof v);
+  return static_cast<int>(v);
+}
 
 // Throws Error(invalid_argument) "argument 'name' is NULL" when p is NULL.
 inline void require(const void* p, const char* name) {

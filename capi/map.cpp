@@ -128,7 +128,8 @@ int occseg_map_from_buffer_flags(occseg_map** out, const void* data, occseg_dtyp
     *out = nullptr;
     require(data, "data");
     require(dims, "dims");
-    const std::size_t item = item_size(static_cast<int>(dtype));
+    const int dt = occseg::capi::enum_value(dtype);
+    const std::size_t item = item_size(dt);
     if (flags & ~uint32_t(OCCSEG_IMPORT_CLAMP | OCCSEG_IMPORT_NAN_UNKNOWN))
       invalid("flags " + std::to_string(flags) + " has bits that are no occseg_import_flags");
     const Dims d{dims[0], dims[1], dims[2]};
@@ -147,7 +148,7 @@ int occseg_map_from_buffer_flags(occseg_map** out, const void* data, occseg_dtyp
     m->grid.dims = d;
     m->grid.voxel_size = voxel_size;
     m->grid.p.resize(d.count());
-    convert(m->grid, static_cast<const char*>(data), static_cast<int>(dtype), s, flags);
+    convert(m->grid, static_cast<const char*>(data), dt, s, flags);
     *out = m.release();
   });
 }

@@ -135,7 +135,7 @@ void occseg_plugin_host_abi(uint32_t* major, uint32_t* minor) {
 }
 
 uint32_t occseg_stage_count(occseg_stage_kind kind) {
-  switch (kind) {
+  switch (occseg::capi::enum_value(kind)) {
     case OCCSEG_STAGE_TEXTURE: return static_cast<uint32_t>(occseg::texture_operators().size());
     case OCCSEG_STAGE_SIMILARITY: return static_cast<uint32_t>(occseg::similarities().size());
     case OCCSEG_STAGE_READER: return static_cast<uint32_t>(occseg::map_readers().size());
@@ -146,17 +146,17 @@ uint32_t occseg_stage_count(occseg_stage_kind kind) {
 
 const char* occseg_stage_name(occseg_stage_kind kind, uint32_t index) {
   StageText t{};
-  return stage_at(kind, index, t) ? t.name : nullptr;
+  return stage_at(occseg::capi::enum_value(kind), index, t) ? t.name : nullptr;
 }
 
 const char* occseg_stage_description(occseg_stage_kind kind, uint32_t index) {
   StageText t{};
-  return stage_at(kind, index, t) ? t.description : nullptr;
+  return stage_at(occseg::capi::enum_value(kind), index, t) ? t.description : nullptr;
 }
 
 const char* occseg_stage_plugin(occseg_stage_kind kind, uint32_t index) {
   StageText t{};
-  return stage_at(kind, index, t) ? t.plugin : nullptr;
+  return stage_at(occseg::capi::enum_value(kind), index, t) ? t.plugin : nullptr;
 }
 
 const char* occseg_param_plugin(uint32_t index) {

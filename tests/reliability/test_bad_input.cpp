@@ -5,6 +5,7 @@
 #include <cstring>
 #include <limits>
 
+#include "c_calls.h"
 #include "support.hpp"
 
 using namespace occseg::reliability;
@@ -133,9 +134,15 @@ TEST(BadStrides, NegativeStridesReadTheFlippedView) {
 TEST(BadEnums, DtypeFlagsPresetAndParameterValuesAreRefused) {
   float p[64] = {0};
   occseg_map* m = nullptr;
-  EXPECT_STATUS(occseg_map_from_buffer(&m, p, static_cast<occseg_dtype>(9), k444, nullptr, 1.0), OCCSEG_EINVAL,
+  EXPECT_STATUS(occseg_test_from_buffer(&m, p, 9, k444, nullptr, 1.0, 0), OCCSEG_EINVAL,
                 "dtype 9 is not an occseg_dtype");
+  EXPECT_STATUS(occseg_test_from_buffer(&m, p, -1, k444, nullptr, 1.0, 0), OCCSEG_EINVAL, "dtype -1");
   EXPECT_STATUS(occseg_map_from_buffer_flags(&m, p, OCCSEG_F32, k444, nullptr, 1.0, 8), OCCSEG_EINVAL, "flags 8");
+  // Stage kinds beyond the enumerators: nothing there, no crash.
+  EXPECT_EQ(occseg_test_stage_count(4), 0u);
+  EXPECT_EQ(occseg_test_stage_count(-1), 0u);
+  EXPECT_EQ(occseg_test_stage_name(9, 0), nullptr);
+  EXPECT_GT(occseg_test_stage_count(0), 0u);
   occseg_params* params = nullptr;
   ASSERT_EQ(occseg_params_create(&params), OCCSEG_OK);
   EXPECT_STATUS(occseg_params_set(params, "preset", "fast"), OCCSEG_EINVAL, "fast");
