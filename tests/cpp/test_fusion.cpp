@@ -111,3 +111,51 @@ TEST(Fusion, FitFrameAndBadInput) {
   OccupancyFusion fu(frame(2, 2, 2));
   EXPECT_THROW(fu.insert_scan({NAN, 0, 0}, std::vector<Vec3>{{0, 0, 0}}, 1), Error);
 }
+
+// Progress (the `occseg` progress bar and Ctrl-C hang on it): reports after every 65536 rays,
+// changes nothing in the map, and a cancel leaves the grid as the earlier scans made it.
+namespace {
+std::vector<Vec3> ring(std::size_t n, double z) {
+  std::vector<Vec3> pts;
+  for (std::size_t i = 0; i < n; ++i)
+    pts.push_back({2.0 + std::cos(i * 1e-4) * 1.5, 2.0 + std::sin(i * 1e-4) * 1.5, z + (i % 5) * 0.2});
+  return pts;
+}
+}  // namespace
+
+TEST(Fusion, ProgressReportsEveryChunkAndChangesNothing) {
+  const std::vector<Vec3> pts = ring(200000, 0.3);
+  OccupancyFusion plain(frame(40, 40, 30)), watched(frame(40, 40, 30));
+  std::vector<std::size_t> done;
+  watched.set_progress([&](std::size_t d, std::size_t count) {
+    EXPECT_EQ(count, pts.size());
+    done.push_back(d);
+    return true;
+  });
+  plain.insert_scan({2.0, 2.0, 1.0}, pts, 2);
+  watched.insert_scan({2.0, 2.0, 1.0}, pts, 2);
+  EXPECT_EQ(done, (std::vector<std::size_t>{65536, 131072, 196608, 200000}));
+  EXPECT_EQ(plain.log_odds(), watched.log_odds());
+}
+
+TEST(Fusion, CancelledScanLeavesTheEarlierOnes) {
+  OccupancyFusion fu(frame(40, 40, 30)), once(frame(40, 40, 30));
+  fu.insert_scan({2.0, 2.0, 1.0}, ring(1000, 0.3), 1);
+  once.insert_scan({2.0, 2.0, 1.0}, ring(1000, 0.3), 1);
+  int calls = 0;
+  fu.set_progress([&](std::size_t, std::size_t) { return ++calls < 2; });
+  try {
+    fu.insert_scan({2.0, 2.0, 1.0}, ring(150000, 0.5), 2);
+    FAIL() << "no cancel";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.status(), Status::cancelled);
+  }
+  EXPECT_EQ(calls, 2);
+  EXPECT_EQ(fu.scans(), 1u);
+  EXPECT_EQ(fu.log_odds(), once.log_odds());
+  // Usable afterwards: the same scan again, now to the end, gives what a fresh fusion gives.
+  fu.set_progress({});
+  fu.insert_scan({2.0, 2.0, 1.0}, ring(150000, 0.5), 2);
+  once.insert_scan({2.0, 2.0, 1.0}, ring(150000, 0.5), 2);
+  EXPECT_EQ(fu.log_odds(), once.log_odds());
+}

@@ -111,3 +111,37 @@ TEST(SimScanner, BadConfigAndScenesAreRejected) {
   EXPECT_THROW(make_scene("cone", Dims{8, 8, 8}), Error);
   for (const std::string& n : scene_names()) EXPECT_NO_THROW(make_scene(n, Dims{64, 64, 16}));
 }
+
+// ScanConfig::progress (the `occseg demo` progress bar and Ctrl-C): one report per planar layer,
+// in order, ending at 1; the same map as without it; false cancels.
+TEST(SimScanner, ProgressCountsLayersAndCancels) {
+  const Scene s = make_scene("cone", Dims{48, 48, 16}, 0.04);
+  ScanConfig c;
+  c.threads = 3;
+  const Grid plain = simulate_map(s, c);
+  std::vector<double> seen;
+  c.progress = [&](double f) {
+    seen.push_back(f);
+    return true;
+  };
+  EXPECT_EQ(simulate_map(s, c).p, plain.p);
+  ASSERT_EQ(seen.size(), 16u);
+  for (std::size_t k = 0; k < seen.size(); ++k) EXPECT_DOUBLE_EQ(seen[k], double(k + 1) / 16);
+  c.progress = [](double f) { return f < 0.25; };
+  try {
+    simulate_map(s, c);
+    FAIL() << "no cancel";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.status(), Status::cancelled);
+  }
+  c.mode = ScanMode::full3d;  // one fusion: reports within each viewpoint's scan
+  seen.clear();
+  c.progress = [&](double f) {
+    seen.push_back(f);
+    return true;
+  };
+  EXPECT_EQ(simulate_map(s, c).p, [&] { ScanConfig d = c; d.progress = {}; return simulate_map(s, d).p; }());
+  ASSERT_FALSE(seen.empty());
+  EXPECT_DOUBLE_EQ(seen.back(), 1.0);
+  for (std::size_t k = 1; k < seen.size(); ++k) EXPECT_LT(seen[k - 1], seen[k]);
+}

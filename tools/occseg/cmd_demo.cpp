@@ -54,6 +54,7 @@ std::string num(double v) {
 }
 
 int run(const DemoArgs& o) {
+  install_interrupt_handlers();  // Ctrl-C cancels through the progress callbacks
   if (o.dims.size() != 3) throw Error(Status::invalid_argument, "--dims takes three numbers: NX NY NZ");
   Params params = make_params(o.pipeline);
   ProgressBar bar(stderr_is_terminal() && !o.report.quiet);

@@ -57,6 +57,7 @@ std::string g6(double v) {
 std::string vec(const std::array<double, 3>& v) { return "(" + g6(v[0]) + ", " + g6(v[1]) + ", " + g6(v[2]) + ")"; }
 
 int run(const InfoArgs& o) {
+  install_interrupt_handlers();  // Ctrl-C cancels through the progress callbacks
   const Params params = make_params(o.pipeline);
   ProgressBar bar(stderr_is_terminal() && !o.report.quiet);
   MapInputOptions in = make_input_options(o.in, o.pipeline.threads);

@@ -42,6 +42,7 @@ std::string base_name(const std::string& path) {
 }
 
 int run(const SegmentArgs& o) {
+  install_interrupt_handlers();  // Ctrl-C cancels through the progress callbacks
   Params params = make_params(o.pipeline);
   ProgressBar bar(stderr_is_terminal() && !o.report.quiet);
   params.progress = bar.segment_callback();

@@ -49,7 +49,6 @@ const char* kFooter =
 }  // namespace
 
 int main(int argc, char** argv) {
-  install_interrupt_handlers();
   CLI::App app{"occseg: texture-based segmentation of 3D probabilistic occupancy maps", "occseg"};
   app.set_version_flag("--version", std::string("occseg ") + OCCSEG_VERSION_TEXT);
   app.require_subcommand(0, 1);

@@ -14,7 +14,8 @@
 namespace occseg::cli {
 
 // Installs handlers for SIGINT and SIGTERM that only record the signal (async-signal-safe); the
-// job notices it at its next progress report or check_interrupted().
+// job notices it at its next progress report or check_interrupted(). Only commands that check
+// install them; in the others a signal ends the process as usual.
 void install_interrupt_handlers();
 // The signal received (SIGINT, SIGTERM) or 0.
 int interrupt_signal();
