@@ -68,6 +68,21 @@ inline void unite_stretches(std::uint32_t* labels, const std::uint8_t* cur, cons
   }
 }
 
+// Unites run [x0, x1) of state v (label root `rs`) with every stretch of state v in row `other`
+// over [lo, hi): the 26-connected case, where diagonal neighbours count.
+inline void unite_range(std::uint32_t* labels, std::uint8_t v, const std::uint8_t* other, std::size_t other_index,
+                        std::size_t lo, std::size_t hi, std::uint32_t rs) {
+  std::size_t x = lo;
+  while (x < hi) {
+    x = find_first(other, v, true, x, hi);
+    if (x == hi) break;
+    unite(labels, rs, labels[other_index + x]);
+    x = find_first(other, v, false, x + 1, hi);
+  }
+}
+
+constexpr std::uint8_t kOccupiedState = static_cast<std::uint8_t>(State::occupied);
+
 struct SlotStats {  // one segment's share of one slab
   std::uint32_t id;
   State state;
@@ -80,7 +95,7 @@ struct SlotStats {  // one segment's share of one slab
 }  // namespace
 
 void label_components(const std::vector<std::uint8_t>& st, const Grid& g, std::vector<std::uint32_t>& labels,
-                      std::vector<Segment>& segments, int threads) {
+                      std::vector<Segment>& segments, int threads, bool occupied26) {
   const std::size_t n = g.dims.count();
   if (n >= std::numeric_limits<std::uint32_t>::max())
     throw Error(Status::unsupported, "maps of " + std::to_string(n) +
@@ -106,8 +121,20 @@ void label_components(const std::vector<std::uint8_t>& st, const Grid& g, std::v
             const std::size_t e = run_end(row, x, nx);
             const auto rs = static_cast<std::uint32_t>(i0 + x);
             std::fill(lab + i0 + x, lab + i0 + e, rs);
-            if (y > 0) unite_stretches(lab, row, row - nx, i0 - nx, x, e, rs);
-            if (z > zb) unite_stretches(lab, row, row - sz, i0 - sz, x, e, rs);
+            if (occupied26 && row[x] == kOccupiedState) {
+              // Neighbours before this run in scan order: row y-1 of this plane and rows y-1..y+1
+              // of the plane below, each one voxel wider on both sides.
+              const std::size_t lo = x > 0 ? x - 1 : 0, hi = std::min(nx, e + 1);
+              if (y > 0) unite_range(lab, kOccupiedState, row - nx, i0 - nx, lo, hi, rs);
+              if (z > zb)
+                for (std::size_t yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < ny; ++yy) {
+                  const std::size_t j0 = nx * (yy + ny * (z - 1));
+                  unite_range(lab, kOccupiedState, s + j0, j0, lo, hi, rs);
+                }
+            } else {
+              if (y > 0) unite_stretches(lab, row, row - nx, i0 - nx, x, e, rs);
+              if (z > zb) unite_stretches(lab, row, row - sz, i0 - sz, x, e, rs);
+            }
             x = e;
           }
         }
@@ -144,6 +171,18 @@ void label_components(const std::vector<std::uint8_t>& st, const Grid& g, std::v
       last_a = a;
       last_b = b;
     }
+    if (!occupied26) continue;
+    // Occupied voxels of the slab's first plane also meet the 8 diagonal neighbours below.
+    for (std::size_t y = 0; y < ny; ++y)
+      for (std::size_t x = 0; x < nx; ++x) {
+        const std::size_t i = z * sz + y * nx + x;
+        if (s[i] != kOccupiedState) continue;
+        for (std::size_t yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < ny; ++yy)
+          for (std::size_t xx = x > 0 ? x - 1 : 0; xx <= x + 1 && xx < nx; ++xx) {
+            const std::size_t j = (z - 1) * sz + yy * nx + xx;
+            if (s[j] == kOccupiedState) unite(parent.data(), base[sl] + lab[i], base[sl - 1] + lab[j]);
+          }
+      }
   }
   // Final ids in order of first voxel: a component's root precedes it.
   std::vector<std::uint32_t> final_id(base[slabs]);

@@ -116,7 +116,7 @@ Result segment(const Grid& grid, const Params& params, bool keep_stages) {
   }
   release_freed_memory();
   st.begin("labelling");
-  label_components(states, grid, r.labels, r.segments, params.threads);
+  label_components(states, grid, r.labels, r.segments, params.threads, params.occupied_connectivity == 26);
   st.end();
   return r;
 }

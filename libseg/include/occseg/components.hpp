@@ -24,10 +24,13 @@ struct Segment {
 // depends on this constant but never on the thread count (docs/performance.md).
 constexpr std::size_t kLabelSlab = 8;
 
-// Labels each 6-connected region of equal state 0..N-1, numbered in the order of their first
-// voxel (x fastest), and fills `segments` (index = id). Throws Error(unsupported) beyond 2^32-1
-// voxels, since labels are uint32. `threads` as in Params (0: all cores); results never depend on it.
+// Labels each connected region of equal state 0..N-1, numbered in the order of their first
+// voxel (x fastest), and fills `segments` (index = id). Regions are 6-connected; with
+// `occupied26`, occupied voxels also join across edges and corners (26-connectivity). Throws
+// Error(unsupported) beyond 2^32-1 voxels, since labels are uint32. `threads` as in Params
+// (0: all cores); results never depend on it.
 void label_components(const std::vector<std::uint8_t>& states, const Grid& grid,
-                      std::vector<std::uint32_t>& labels, std::vector<Segment>& segments, int threads = 0);
+                      std::vector<std::uint32_t>& labels, std::vector<Segment>& segments, int threads = 0,
+                      bool occupied26 = false);
 
 }  // namespace occseg

@@ -28,6 +28,9 @@ struct Params {
   // default preset only: 0.5-valued regions that hold no (2r+1)^3 cube of them (r = gap_radius; 0: none) are "gaps between
   // rays" and take the state of the texture segmentation around them; thicker ones stay unknown.
   int gap_radius = 1;
+  // Connectivity of occupied segments: 26 (default preset: voxels touching at an edge or a corner
+  // are one object, so thin sloping shells stay whole) or 6 (paper). Free and unknown: always 6.
+  int occupied_connectivity = 26;
   int threads = 0;             // 0: all cores. Results never depend on it.
   std::string texture = "lbp6";     // texture operator, by name (occseg/registry.hpp)
   std::string similarity = "g";     // histogram similarity of the division, by name

@@ -361,7 +361,7 @@ void apply_voxel_rules(std::vector<std::uint8_t>& st, const Grid& g, const Param
 }
 
 void label(const std::vector<std::uint8_t>& st, const Grid& g, std::vector<std::uint32_t>& labels,
-           std::vector<Segment>& segments) {
+           std::vector<Segment>& segments, bool occupied26) {
   const std::size_t n = g.dims.count(), nx = g.dims.nx, ny = g.dims.ny, sz = nx * ny;
   labels.resize(n);
   std::uint32_t* parent = labels.data();
@@ -372,6 +372,16 @@ void label(const std::vector<std::uint8_t>& st, const Grid& g, std::vector<std::
     if (x > 0 && st[i - 1] == st[i]) unite(parent, u, u - 1);
     if (y > 0 && st[i - nx] == st[i]) unite(parent, u, static_cast<std::uint32_t>(i - nx));
     if (z > 0 && st[i - sz] == st[i]) unite(parent, u, static_cast<std::uint32_t>(i - sz));
+    if (occupied26 && st[i] == static_cast<std::uint8_t>(State::occupied))
+      for (int dz = -1; dz <= 0; ++dz)  // the 13 neighbours that precede voxel i in scan order
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            if (dz == 0 && (dy > 0 || (dy == 0 && dx >= 0))) continue;
+            const long xx = long(x) + dx, yy = long(y) + dy, zz = long(z) + dz;
+            if (xx < 0 || yy < 0 || zz < 0 || xx >= long(nx) || yy >= long(ny)) continue;
+            const std::size_t j = std::size_t(xx) + nx * (std::size_t(yy) + ny * std::size_t(zz));
+            if (st[j] == st[i]) unite(parent, u, static_cast<std::uint32_t>(j));
+          }
   }
   segments.clear();
   for (std::size_t i = 0; i < n; ++i) {
@@ -430,7 +440,7 @@ Output segment(const Grid& grid, const Params& params) {
   reference::refine_boundaries(st, grid, params);
   if (params.preset == Preset::default_preset) reference::apply_voxel_rules(st, grid, params);
   o.refined = st;
-  reference::label(st, grid, o.labels, o.segments);
+  reference::label(st, grid, o.labels, o.segments, params.occupied_connectivity == 26);
   return o;
 }
 

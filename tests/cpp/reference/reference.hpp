@@ -26,9 +26,10 @@ void refine_unknown(std::vector<std::uint8_t>& states, const Grid& grid, const P
 void refine_boundaries(std::vector<std::uint8_t>& states, const Grid& grid, const Params& params);
 // The default preset's per-voxel rules, with the opening done by per-line prefix sums.
 void apply_voxel_rules(std::vector<std::uint8_t>& states, const Grid& grid, const Params& params);
-// Union-find labelling and the segment table, statistics summed in scan order.
+// Union-find labelling and the segment table, statistics summed in scan order; occupied voxels
+// 26-connected when `occupied26`, everything else 6-connected.
 void label(const std::vector<std::uint8_t>& states, const Grid& grid, std::vector<std::uint32_t>& labels,
-           std::vector<Segment>& segments);
+           std::vector<Segment>& segments, bool occupied26 = false);
 
 struct Output {
   std::vector<Block> blocks;
