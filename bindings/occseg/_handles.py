@@ -28,3 +28,36 @@ def own(owner, kind, free, handle):
     called (close) or when `owner` is collected, whichever comes first, and never twice."""
     _count(kind, +1)
     return weakref.finalize(owner, _release, free, kind, handle)
+
+
+class Owned:
+    """Base of the Python objects that own one C handle (Map, Result): the handle property, close(),
+    `closed` and the context manager. Subclasses call _own(handle, kind, free) in __init__ and set
+    _what ("occseg.Map", ...) for error messages."""
+
+    _what = "occseg object"
+
+    def _own(self, handle, kind, free):
+        self._handle = handle.value if hasattr(handle, "value") else int(handle)
+        self._finalizer = own(self, kind, free, self._handle)
+
+    @property
+    def handle(self):
+        """The C pointer as an int; ValueError once the object is closed."""
+        if not self._finalizer.alive:
+            raise ValueError(f"{self._what}: the {self._what.split('.')[-1].lower()} is closed")
+        return self._handle
+
+    @property
+    def closed(self):
+        return not self._finalizer.alive
+
+    def close(self):
+        """Frees the C handle now (later calls do nothing)."""
+        self._finalizer()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()

@@ -5,7 +5,7 @@ import os
 import numpy as np
 
 from ._errors import OccsegError, Status, check
-from ._handles import own
+from ._handles import Owned
 from ._lib import c_double3, c_ptrdiff3, c_size3, has, lib
 from ._text import option_array
 
@@ -43,17 +43,18 @@ def buffer_args(arr):
     return data, _DTYPES[arr.dtype], dims, st
 
 
-class Map:
+class Map(Owned):
     """A probabilistic occupancy grid held by liboccseg (occseg_map): nx * ny * nz probabilities,
     a voxel edge length in metres and the world position of the outer corner of voxel (0, 0, 0).
 
     Make one with Map.from_array() or occseg.read_map(). The C handle is freed by close(), at the
     end of a `with` block, or when the object is collected."""
 
+    _what = "occseg.Map"
+
     def __init__(self, handle):
         """Takes ownership of a C occseg_map handle (a non-NULL ctypes.c_void_p or int)."""
-        self._handle = handle.value if isinstance(handle, ctypes.c_void_p) else int(handle)
-        self._finalizer = own(self, "map", lib.occseg_map_free, self._handle)
+        self._own(handle, "map", lib.occseg_map_free)
 
     @classmethod
     def from_array(cls, probabilities, voxel_size=1.0, origin=None, *, clamp=False, nan_unknown=False):
@@ -67,27 +68,6 @@ class Map:
         out = ctypes.c_void_p()
         check(lib.occseg_map_from_buffer_flags(ctypes.byref(out), data, dtype, dims, strides, float(voxel_size), flags))
         return _configured(cls(out), None, origin)
-
-    @property
-    def handle(self):
-        """The C occseg_map pointer as an int; ValueError once the map is closed."""
-        if not self._finalizer.alive:
-            raise ValueError("occseg.Map: the map is closed")
-        return self._handle
-
-    @property
-    def closed(self):
-        return not self._finalizer.alive
-
-    def close(self):
-        """Frees the C map now (later calls do nothing)."""
-        self._finalizer()
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
 
     @property
     def dims(self):

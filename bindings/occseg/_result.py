@@ -7,7 +7,7 @@ import os
 import numpy as np
 
 from ._errors import OccsegError, Status, check
-from ._handles import own
+from ._handles import Owned
 from ._lib import SegmentInfo, c_size3, lib
 
 
@@ -38,7 +38,7 @@ class Segment:
         return tuple(slice(lo[k], hi[k] + 1) for k in (2, 1, 0))
 
 
-class Result:
+class Result(Owned):
     """The output of occseg.segment().
 
     `labels` (uint32, the shape of the input: segment id per voxel), `segments` (list of Segment,
@@ -46,10 +46,11 @@ class Result:
     data copied out at creation and stay usable after close(). states() and write() read the C
     result, which close(), the end of a `with` block or garbage collection frees."""
 
+    _what = "occseg.Result"
+
     def __init__(self, handle, shape, voxel_size, origin):
         """Takes ownership of a C occseg_result handle; `shape` is the input's NumPy shape."""
-        self._handle = handle.value if isinstance(handle, ctypes.c_void_p) else int(handle)
-        self._finalizer = own(self, "result", lib.occseg_result_free, self._handle)
+        self._own(handle, "result", lib.occseg_result_free)
         d = c_size3()
         check(lib.occseg_result_dims(self._handle, d))
         self.dims = tuple(d)  # (nx, ny, nz)
@@ -77,27 +78,6 @@ class Result:
         check(lib.occseg_result_segment(self._handle, index, ctypes.byref(info)))
         return Segment(info.id, State(info.state), info.voxels, info.mop,
                        (tuple(info.bbox_min), tuple(info.bbox_max)), tuple(info.centroid))
-
-    @property
-    def handle(self):
-        """The C occseg_result pointer as an int; ValueError once the result is closed."""
-        if not self._finalizer.alive:
-            raise ValueError("occseg.Result: the result is closed")
-        return self._handle
-
-    @property
-    def closed(self):
-        return not self._finalizer.alive
-
-    def close(self):
-        """Frees the C result now (later calls do nothing); labels and segments stay."""
-        self._finalizer()
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
 
     def states(self):
         """The state (State value) of each voxel, uint8, the shape of labels."""
