@@ -91,7 +91,9 @@ void print_summary(std::ostream& out, const RunReport& run) {
   out << "voxels: " << fixed(100 * vox[0] / n, 2) << " % free, " << fixed(100 * vox[1] / n, 2) << " % unknown, "
       << fixed(100 * vox[2] / n, 2) << " % occupied\n";
   const std::vector<const Segment*> top = largest_objects(r, run.top);
-  if (top.empty()) {
+  if (run.top == 0) {
+    // --top 0: no table
+  } else if (top.empty()) {
     out << "no occupied segment\n";
   } else {
     out << "largest objects (occupied segments; boxes in metres, min to max corner):\n";
