@@ -18,7 +18,7 @@ def run(*args):
 
 def info(*args):
     r = run("info", *args, "--json")
-    assert r.returncode == 0, (args, r.returncode, r.stderr)
+    assert r.returncode == 0 and r.stderr == "", (args, r.returncode, r.stderr)  # OctoMap's chatter too
     return json.loads(r.stdout)
 
 
@@ -78,6 +78,25 @@ assert abs(j["values"]["min"] - 0.1192) < 1e-3 and abs(j["values"]["max"] - 0.97
 # At a coarser voxel size the box covers the same space with 2x2x2 blocks.
 j = info(os.path.join(data, "geb079.bt"), "--voxel-size", "0.16")
 assert j["dims"] == [244, 94, 20] and abs(j["voxel_size"] - 0.16) < 1e-9, j
+
+# OctoMap .ot written by hand (octomap's AbstractOcTree::write layout: header lines, then per node
+# its float log-odds and a byte of child flags, depth first). Root child 7, then child 0 down to
+# depth 14, whose eight children are leaves of 2 x 2 x 2 voxels of 0.1 m: keys 32768..32771, so
+# the known box is 0..0.4 m on each axis. Leaf i has log-odds l[i]: inner nodes hold the maximum.
+l = [2.0, -1.0, 0.0, 2.0, -2.0, 1.0, -1.0, 0.25]
+nodes = [(max(l), 1 << 7)] + [(max(l), 1)] * 13 + [(max(l), 0xFF)] + [(v, 0) for v in l]
+with open(os.path.join(work, "tiny.ot"), "wb") as f:
+    f.write(f"# Octomap OcTree file\nid OcTree\nsize {len(nodes)}\nres 0.1\ndata\n".encode())
+    for value, children in nodes:
+        f.write(struct.pack("<fB", value, children))
+j = info("tiny.ot")
+assert j["format"] == "OctoMap tree (.ot, log-odds)" and j["dims"] == [4, 4, 4], j
+assert abs(j["voxel_size"] - 0.1) < 1e-9 and np.allclose(j["origin"], [0, 0, 0]), j
+p = 1 / (1 + np.exp(-np.array(l)))  # each leaf: 8 voxels at its probability
+assert j["states"] == {"free": 8 * int((p < 0.498).sum()), "unknown": 8 * int(((p >= 0.498) & (p <= 0.502)).sum()),
+                       "occupied": 8 * int((p > 0.502).sum())} == {"free": 24, "unknown": 8, "occupied": 32}, j
+assert abs(j["values"]["min"] - p.min()) < 1e-6 and abs(j["values"]["max"] - p.max()) < 1e-6, j["values"]
+assert j["unobserved"] == 8, j  # log-odds 0 is exactly 0.5
 
 # Clouds are fused first (the grid segment would use): sizes follow --voxel-size.
 pcd = os.path.join(data, "table_scene_mug_stereo_textured.pcd")

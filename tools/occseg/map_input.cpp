@@ -1,8 +1,12 @@
 #include "map_input.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
+#include <iostream>
 
 #include "occseg/error.hpp"
 #include "occseg/npy.hpp"
@@ -33,6 +37,32 @@ std::string extension(const std::string& path) {
 void reject(bool given, const char* option, const std::string& ext) {
   if (given) throw Error(Status::invalid_argument, std::string(option) + " does not apply to " + ext + " input");
 }
+
+// OctoMap tells stderr what it reads ("Reading octree type OcTree", "Done (23 nodes)"); the tool
+// has its own progress and errors, so stderr (fd 2) goes to /dev/null while OctoMap reads.
+class [[maybe_unused]] SilenceStderr {
+ public:
+  SilenceStderr() {
+    std::cerr.flush();
+    std::fflush(stderr);
+    saved_ = ::dup(STDERR_FILENO);
+    const int null = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+    if (saved_ >= 0 && null >= 0) ::dup2(null, STDERR_FILENO);
+    if (null >= 0) ::close(null);
+  }
+  ~SilenceStderr() {
+    if (saved_ < 0) return;
+    std::cerr.flush();
+    std::fflush(stderr);
+    ::dup2(saved_, STDERR_FILENO);
+    ::close(saved_);
+  }
+  SilenceStderr(const SilenceStderr&) = delete;
+  SilenceStderr& operator=(const SilenceStderr&) = delete;
+
+ private:
+  int saved_ = -1;
+};
 
 [[noreturn, maybe_unused]] void not_built(const std::string& ext, const char* lib) {
   throw Error(Status::unsupported, ext + " input needs " + lib + ", which this build of occseg lacks");
@@ -112,6 +142,7 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
 #endif
     } else {
 #ifdef OCCSEG_HAVE_OCTOMAP
+      SilenceStderr quiet;
       in.grid = read_scan_graph(path, scan_options(o));
       in.format = "OctoMap scan graph (.graph), fused by ray casting";
 #else
@@ -130,7 +161,10 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
     if (o.coarsen != "max" && o.coarsen != "mean")
       throw Error(Status::invalid_argument, "--coarsen '" + o.coarsen + "' is not max or mean");
     t.coarsen = o.coarsen == "mean" ? Coarsen::mean : Coarsen::max;
-    in.grid = read_octree_file(path, t);
+    {
+      SilenceStderr quiet;
+      in.grid = read_octree_file(path, t);
+    }
     in.format = std::string("OctoMap tree (") + ext + (ext == ".bt" ? ", maximum likelihood)" : ", log-odds)");
 #else
     not_built(ext, "OctoMap (liboccseg_octomap)");
