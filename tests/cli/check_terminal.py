@@ -12,18 +12,18 @@ import subprocess
 import sys
 import time
 
-occseg, work = sys.argv[1], sys.argv[2]
+occseg, work, data = sys.argv[1], sys.argv[2], sys.argv[3]
 BAR = re.compile(r"occseg: [\w .:-]+ \[[#.]{30}\] +\d+%  [\d.]+ s\x1b\[K")
 
 
-def in_terminal(args, interrupt=None, when="", deadline=300):
+def in_terminal(args, interrupt=None, when="", deadline=300, env=None):
     """Runs occseg with stdin, stdout and stderr on a new pseudo-terminal (its controlling
     terminal). interrupt: None, b"\\x03" (typed Ctrl-C) or a signal number, sent once the progress
     bar shows with `when` in its label. Returns (exit code, everything the terminal received)."""
     pid, fd = pty.fork()
     if pid == 0:
         os.chdir(work)
-        os.execv(occseg, [occseg, *args])
+        os.execve(occseg, [occseg, *args], {**os.environ, **(env or {})})
     seen, sent, end = b"", False, time.time() + deadline
     while time.time() < end:
         ready, _, _ = select.select([fd], [], [], 1.0)
@@ -85,6 +85,15 @@ with open(os.path.join(work, "keep", "notes.txt"), "w") as f:
     f.write("mine\n")
 code, text = in_terminal(job + ["--out", "keep"], interrupt=b"\x03", when="segmenting: ")
 assert code == 130 and os.listdir(os.path.join(work, "keep")) == ["notes.txt"], (code, os.listdir(os.path.join(work, "keep")))
+
+# Fusing a point cloud reports through ScanOptions::progress: with the bar shown from the start
+# (OCCSEG_PROGRESS_DELAY=0), "fusing scans" appears after the first 65536 of its 254456 rays, and
+# Ctrl-C then stops the job.
+cloud = ["segment", os.path.join(data, "office1.pcd"), "--voxel-size", "0.02", "--threads", "1"]
+code, text = in_terminal(cloud + ["--out", "cloud_int"], interrupt=b"\x03", when="fusing scans",
+                         env={"OCCSEG_PROGRESS_DELAY": "0"})
+assert code == 130 and not os.path.exists(os.path.join(work, "cloud_int")), (code, text)
+assert re.search(r"occseg: fusing scans \[#*\.*\] +\d+%", text), text
 
 # The demo, stopped by SIGTERM while it simulates or segments: exit 143, no occseg-out.
 code, text = in_terminal(["demo", "--threads", "1"], interrupt=signal.SIGTERM)

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 
 #include "occseg/error.hpp"
@@ -55,6 +56,14 @@ void check_interrupted() {
 }
 
 bool stderr_is_terminal() { return ::isatty(STDERR_FILENO) == 1; }
+
+double ProgressBar::default_delay() {
+  const char* e = std::getenv("OCCSEG_PROGRESS_DELAY");
+  if (!e || !*e) return 0.5;
+  char* end = nullptr;
+  const double v = std::strtod(e, &end);
+  return end && *end == '\0' && v >= 0 && v < 1e6 ? v : 0.5;
+}
 
 ProgressBar::ProgressBar(bool enabled, double delay)
     : enabled_(enabled), delay_(delay), start_(std::chrono::steady_clock::now()) {

@@ -31,7 +31,9 @@ class ProgressBar {
   // job has lasted longer than `delay_seconds` since construction, so short jobs stay silent.
   // A ticker thread redraws the last reported state ten times a second, so the bar appears on
   // time and its clock runs during steps that report nothing (reading a file, writing).
-  explicit ProgressBar(bool enabled, double delay_seconds = 0.5);
+  explicit ProgressBar(bool enabled, double delay_seconds = default_delay());
+  // 0.5 s, or the environment variable OCCSEG_PROGRESS_DELAY (seconds, >= 0) when it is set.
+  static double default_delay();
   ~ProgressBar();
   ProgressBar(const ProgressBar&) = delete;
   ProgressBar& operator=(const ProgressBar&) = delete;
