@@ -74,11 +74,11 @@ void BM_Octomap(benchmark::State& state) {
 }  // namespace
 
 BENCHMARK(BM_Occseg)->ArgNames({"scene", "mm", "threads"})
-    ->Args({0, 20, 1})->Args({0, 20, 0})->Args({0, 10, 1})->Args({0, 10, 0})
-    ->Args({1, 50, 1})->Args({1, 50, 0})->Args({1, 20, 1})->Args({1, 20, 0})
+    ->Args({0, 20, 1})->Args({0, 20, 2})->Args({0, 10, 1})->Args({0, 10, 2})->Args({0, 5, 1})->Args({0, 5, 2})
+    ->Args({1, 50, 1})->Args({1, 50, 2})->Args({1, 20, 1})->Args({1, 20, 2})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Octomap)->ArgNames({"scene", "mm"})
-    ->Args({0, 20})->Args({0, 10})->Args({1, 50})->Args({1, 20})
+    ->Args({0, 20})->Args({0, 10})->Args({0, 5})->Args({1, 50})->Args({1, 20})
     ->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();
