@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <emmintrin.h>
 #include <limits>
 #include <mutex>
 
@@ -80,13 +81,22 @@ inline void mark(std::uint8_t* m, std::uint8_t bit) {
   if (bit == 1 ? v == 0 : !(v & 2)) __atomic_fetch_or(m, bit, __ATOMIC_RELAXED);
 }
 
-// Amanatides & Woo voxel traversal of the segment a -> b (grid units: (world - origin) /
-// voxel_size), clipped to the grid box. Marks every crossed voxel as a miss and the endpoint
-// voxel as a hit when `hit`. The floating-point arithmetic (clipping, tmax, tdelta, the axis
-// choice) is exactly that of the first implementation, so the same voxels are visited; what
-// changed is the bookkeeping: the linear index advances by a stride instead of being recomputed,
-// the end test compares one index, and the axis choice is branch-free.
-void trace(const double* a, const double* b, bool hit, const Dims& dims, std::uint8_t* marks, TouchBox& box) {
+// One Amanatides & Woo voxel traversal in progress. Each step depends on the previous one (compare
+// tmax, add tdelta: about 9 cycles of latency for a few instructions), so rays are walked several
+// at a time, one step each in turn, and the processor overlaps their chains.
+struct Walk {
+  __m128d tx, ty, tz, dx, dy, dz;  // tmax and tdelta per axis, in the low lane
+  std::uint64_t i, end, sx, sy, sz;  // voxel index, end voxel index, index strides of one step
+  long rx, ry, rz, budget;          // steps left along each axis inside the grid; steps left
+  long c0[3], room[3], step[3];     // start voxel, initial room, step signs (for the touched box)
+  std::uint8_t end_bit;             // 2: the end voxel holds a return, 1: it is only crossed
+};
+
+// Sets up the traversal of the segment a -> b (grid units: (world - origin) / voxel_size),
+// clipped to the grid box; false when the segment misses the box. The floating-point arithmetic
+// (clipping, tmax, tdelta, and in step() the axis choice and tmax updates) is exactly that of
+// the first implementation, so the same voxels are visited; what changed is the bookkeeping.
+bool start_walk(const double* a, const double* b, bool hit, const Dims& dims, Walk& w, TouchBox& box) {
   const double n[3] = {double(dims.nx), double(dims.ny), double(dims.nz)};
   double d[3];
   for (int k = 0; k < 3; ++k) d[k] = b[k] - a[k];
@@ -94,7 +104,7 @@ void trace(const double* a, const double* b, bool hit, const Dims& dims, std::ui
   double t0 = 0, t1 = 1;
   for (int k = 0; k < 3; ++k) {
     if (d[k] == 0) {
-      if (a[k] < 0 || a[k] >= n[k]) return;
+      if (a[k] < 0 || a[k] >= n[k]) return false;
       continue;
     }
     double ta = (0 - a[k]) / d[k], tb = (n[k] - a[k]) / d[k];
@@ -102,10 +112,10 @@ void trace(const double* a, const double* b, bool hit, const Dims& dims, std::ui
     t0 = std::max(t0, ta);
     t1 = std::min(t1, tb);
   }
-  if (t0 > t1) return;
+  if (t0 > t1) return false;
   const bool end_inside = hit && t1 >= 1.0;
-  const std::size_t nx = dims.nx, nxy = nx * dims.ny;
-  long c[3], last[3], step[3];
+  const std::uint64_t nx = dims.nx, nxy = nx * dims.ny;
+  long c[3], last[3];
   double tmax[3], tdelta[3];
   for (int k = 0; k < 3; ++k) {
     const double p = a[k] + t0 * d[k];
@@ -113,55 +123,81 @@ void trace(const double* a, const double* b, bool hit, const Dims& dims, std::ui
     const double q = a[k] + t1 * d[k];
     last[k] = std::clamp(static_cast<long>(std::floor(q)), 0L, static_cast<long>(n[k]) - 1);
     if (d[k] > 0) {
-      step[k] = 1;
+      w.step[k] = 1;
       tmax[k] = (c[k] + 1 - a[k]) / d[k];
       tdelta[k] = 1 / d[k];
     } else if (d[k] < 0) {
-      step[k] = -1;
+      w.step[k] = -1;
       tmax[k] = (c[k] - a[k]) / d[k];
       tdelta[k] = -1 / d[k];
     } else {
-      step[k] = 0;
+      w.step[k] = 0;
       tmax[k] = tdelta[k] = std::numeric_limits<double>::infinity();
     }
+    w.c0[k] = c[k];
+    // Steps left along the axis before the walk would leave the grid (the first implementation
+    // stopped there); an axis with d = 0 is never taken (its tmax is +inf).
+    w.room[k] = w.step[k] > 0 ? static_cast<long>(n[k]) - 1 - c[k]
+                              : (w.step[k] < 0 ? c[k] : std::numeric_limits<long>::max());
   }
   box.add(c);
   // Bounded walk: at most the number of voxel faces crossed plus one.
-  long budget = std::labs(last[0] - c[0]) + std::labs(last[1] - c[1]) + std::labs(last[2] - c[2]) + 1;
-  std::size_t i = static_cast<std::size_t>(c[0]) + nx * static_cast<std::size_t>(c[1]) +
-                  nxy * static_cast<std::size_t>(c[2]);
-  const std::size_t end = static_cast<std::size_t>(last[0]) + nx * static_cast<std::size_t>(last[1]) +
-                          nxy * static_cast<std::size_t>(last[2]);
+  w.budget = std::labs(last[0] - c[0]) + std::labs(last[1] - c[1]) + std::labs(last[2] - c[2]) + 1;
+  w.i = static_cast<std::uint64_t>(c[0]) + nx * static_cast<std::uint64_t>(c[1]) + nxy * static_cast<std::uint64_t>(c[2]);
+  w.end = static_cast<std::uint64_t>(last[0]) + nx * static_cast<std::uint64_t>(last[1]) +
+          nxy * static_cast<std::uint64_t>(last[2]);
   // Unsigned wrap-around makes a step of -1 subtract the stride.
-  const std::size_t sx = static_cast<std::size_t>(step[0]), sy = static_cast<std::size_t>(step[1]) * nx,
-                    sz = static_cast<std::size_t>(step[2]) * nxy;
-  double tx = tmax[0], ty = tmax[1], tz = tmax[2];
-  const double dx = tdelta[0], dy = tdelta[1], dz = tdelta[2];
-  long cx = c[0], cy = c[1], cz = c[2];
-  for (; budget > 0; --budget) {
-    if (i == end) {
-      mark(marks + i, end_inside ? 2 : 1);
-      break;
-    }
-    mark(marks + i, 1);
-    // Same choice as tmax[0] < tmax[1] ? (tmax[0] < tmax[2] ? 0 : 2) : (tmax[1] < tmax[2] ? 1 : 2).
-    const bool xy = tx < ty, xz = tx < tz, yz = ty < tz;
-    const bool kx = xy && xz, ky = !xy && yz, kz = !kx && !ky;
-    cx += kx ? step[0] : 0;
-    cy += ky ? step[1] : 0;
-    cz += kz ? step[2] : 0;
-    // Adding 0.0 leaves every tmax unchanged (finite, or +inf on an axis the ray never takes).
-    tx += kx ? dx : 0.0;
-    ty += ky ? dy : 0.0;
-    tz += kz ? dz : 0.0;
-    i += kx ? sx : (ky ? sy : sz);
-    if ((static_cast<std::size_t>(cx) >= dims.nx) | (static_cast<std::size_t>(cy) >= dims.ny) |
-        (static_cast<std::size_t>(cz) >= dims.nz))
-      break;
+  w.sx = static_cast<std::uint64_t>(w.step[0]);
+  w.sy = static_cast<std::uint64_t>(w.step[1]) * nx;
+  w.sz = static_cast<std::uint64_t>(w.step[2]) * nxy;
+  w.rx = w.room[0];
+  w.ry = w.room[1];
+  w.rz = w.room[2];
+  w.tx = _mm_set_sd(tmax[0]);
+  w.ty = _mm_set_sd(tmax[1]);
+  w.tz = _mm_set_sd(tmax[2]);
+  w.dx = _mm_set_sd(tdelta[0]);
+  w.dy = _mm_set_sd(tdelta[1]);
+  w.dz = _mm_set_sd(tdelta[2]);
+  w.end_bit = end_inside ? 2 : 1;
+  return true;
+}
+
+// Marks the current voxel (a miss, or the end voxel's bit) and moves one voxel on; false when
+// the walk is over. The axis is chosen with compare masks, not branches (the choice is a coin
+// flip on oblique rays), and each tmax gets + tdelta or + 0.0, which leaves it unchanged.
+inline bool step(Walk& w, std::uint8_t* marks) {
+  if (w.i == w.end) {
+    mark(marks + w.i, w.end_bit);
+    return false;
   }
-  // The walk went no further than (cx, cy, cz) on any axis; a step out of the grid was not taken.
-  const long fin[3] = {std::clamp(cx, 0L, long(dims.nx) - 1), std::clamp(cy, 0L, long(dims.ny) - 1),
-                       std::clamp(cz, 0L, long(dims.nz) - 1)};
+  mark(marks + w.i, 1);
+  // Same choice as tmax[0] < tmax[1] ? (tmax[0] < tmax[2] ? 0 : 2) : (tmax[1] < tmax[2] ? 1 : 2).
+  const __m128d xy = _mm_cmplt_sd(w.tx, w.ty), xz = _mm_cmplt_sd(w.tx, w.tz), yz = _mm_cmplt_sd(w.ty, w.tz);
+  const __m128d mx = _mm_and_pd(xy, xz), my = _mm_andnot_pd(xy, yz);
+  const __m128d mz = _mm_andnot_pd(_mm_or_pd(mx, my), _mm_castsi128_pd(_mm_set1_epi32(-1)));
+  w.tx = _mm_add_sd(w.tx, _mm_and_pd(mx, w.dx));
+  w.ty = _mm_add_sd(w.ty, _mm_and_pd(my, w.dy));
+  w.tz = _mm_add_sd(w.tz, _mm_and_pd(mz, w.dz));
+  const std::int64_t kx = _mm_cvtsi128_si64(_mm_castpd_si128(mx));  // 0 or -1
+  const std::int64_t ky = _mm_cvtsi128_si64(_mm_castpd_si128(my));
+  const std::int64_t kz = _mm_cvtsi128_si64(_mm_castpd_si128(mz));
+  w.i += (w.sx & static_cast<std::uint64_t>(kx)) | (w.sy & static_cast<std::uint64_t>(ky)) |
+         (w.sz & static_cast<std::uint64_t>(kz));
+  w.rx += kx;
+  w.ry += ky;
+  w.rz += kz;
+  if ((w.rx | w.ry | w.rz) < 0) return false;
+  return --w.budget > 0;
+}
+
+// Adds the voxels a finished walk covered to the box: walks are monotone along each axis, and
+// went no further than the steps they took (a step out of the grid was counted, not taken).
+void finish_walk(const Walk& w, const Dims& dims, TouchBox& box) {
+  const long moved[3] = {w.room[0] - w.rx, w.room[1] - w.ry, w.room[2] - w.rz};
+  const long n[3] = {static_cast<long>(dims.nx), static_cast<long>(dims.ny), static_cast<long>(dims.nz)};
+  long fin[3];
+  for (int k = 0; k < 3; ++k) fin[k] = std::clamp(w.c0[k] + w.step[k] * moved[k], 0L, n[k] - 1);
   box.add(fin);
 }
 
@@ -198,9 +234,9 @@ void OccupancyFusion::insert_scan(const Vec3& sensor, const float* xyz, std::siz
   const double a[3] = {(sensor[0] - frame_.origin[0]) / vs, (sensor[1] - frame_.origin[1]) / vs,
                        (sensor[2] - frame_.origin[2]) / vs};
   std::uint8_t* marks = marks_.data();
-  auto cast = [&](std::size_t i, TouchBox& box) {
+  auto start = [&](std::size_t i, Walk& w, TouchBox& box) {
     const float* p = xyz + i * stride;
-    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) return;
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) return false;
     Vec3 end{p[0], p[1], p[2]};
     bool hit = true;
     if (maxr >= 0) {
@@ -214,7 +250,36 @@ void OccupancyFusion::insert_scan(const Vec3& sensor, const float* xyz, std::siz
     }
     double b[3];
     for (int k = 0; k < 3; ++k) b[k] = (end[k] - frame_.origin[k]) / vs;
-    trace(a, b, hit, frame_.dims, marks, box);
+    return start_walk(a, b, hit, frame_.dims, w, box);
+  };
+  // Walks rays [r, e) kLanes at a time; a lane whose walk ends takes the next ray.
+  constexpr int kLanes = 4;
+  auto walk_rays = [&](std::size_t r, std::size_t e, TouchBox& box) {
+    Walk lanes[kLanes];
+    bool busy[kLanes];
+    int active = 0;
+    auto refill = [&](int k) {
+      while (r < e)
+        if (start(r++, lanes[k], box)) return true;
+      return false;
+    };
+    for (int k = 0; k < kLanes; ++k) active += busy[k] = refill(k);
+    while (active == kLanes) {
+      for (int k = 0; k < kLanes; ++k)
+        if (!step(lanes[k], marks)) {
+          finish_walk(lanes[k], frame_.dims, box);
+          if (!refill(k)) {
+            busy[k] = false;
+            --active;
+          }
+        }
+    }
+    for (int k = 0; k < kLanes; ++k)  // the last few walks, one by one
+      if (busy[k]) {
+        while (step(lanes[k], marks)) {
+        }
+        finish_walk(lanes[k], frame_.dims, box);
+      }
   };
   TouchBox box;
   std::mutex box_mutex;
@@ -225,7 +290,7 @@ void OccupancyFusion::insert_scan(const Vec3& sensor, const float* xyz, std::siz
     const std::size_t c1 = std::min(count, c0 + chunk);
     parallel_for(c1 - c0, threads, [&](std::size_t b, std::size_t e) {
       TouchBox mine;
-      for (std::size_t i = c0 + b; i < c0 + e; ++i) cast(i, mine);
+      walk_rays(c0 + b, c0 + e, mine);
       std::lock_guard<std::mutex> lock(box_mutex);
       box.merge(mine);
     });
