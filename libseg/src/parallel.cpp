@@ -1,5 +1,7 @@
 #include "occseg/parallel.hpp"
 
+#include "parallel_pool.hpp"
+
 #include <exception>
 #include <mutex>
 #include <system_error>
@@ -7,6 +9,14 @@
 #include <vector>
 
 namespace occseg {
+
+namespace {
+// The context a caller installed on this thread with Context::run (none by default).
+thread_local Context* installed = nullptr;
+}  // namespace
+
+PoolScope::PoolScope(Context* context) : saved_(installed) { installed = context; }
+PoolScope::~PoolScope() { installed = saved_; }
 
 int resolve_threads(int threads) {
   if (threads > 0) return threads;
@@ -16,6 +26,10 @@ int resolve_threads(int threads) {
 
 void parallel_for(std::size_t n, int threads, const std::function<void(std::size_t, std::size_t)>& fn) {
   if (n == 0) return;
+  if (installed) {  // a caller's pool instead of new threads
+    run_on_pool(installed, n, threads, fn);
+    return;
+  }
   std::size_t t = static_cast<std::size_t>(resolve_threads(threads));
   if (t > n) t = n;
   if (t <= 1) {

@@ -1,0 +1,138 @@
+#include "occseg/context.hpp"
+
+#include <algorithm>
+#include <condition_variable>
+#include <cstdint>
+#include <exception>
+#include <mutex>
+#include <string>
+#include <system_error>
+#include <thread>
+#include <vector>
+
+#include "occseg/error.hpp"
+#include "occseg/parallel.hpp"
+#include "parallel_pool.hpp"
+
+namespace occseg {
+
+// Workers sleep on `wake` until the generation changes, run their chunk of the current job, and
+// count down `pending`; the caller runs chunk 0 and waits for pending == 0.
+struct Context::Pool {
+  std::mutex call;  // one job at a time
+  std::mutex m;
+  std::condition_variable wake, done;
+  std::vector<std::thread> workers;
+  const std::function<void(std::size_t, std::size_t)>* fn = nullptr;
+  std::size_t n = 0, chunks = 0, pending = 0;
+  std::uint64_t generation = 0;
+  bool stop = false;
+  std::exception_ptr first;
+
+  void work(std::size_t k) {
+    std::uint64_t seen = 0;
+    for (;;) {
+      std::unique_lock<std::mutex> lock(m);
+      wake.wait(lock, [&] { return stop || generation != seen; });
+      if (stop) return;
+      seen = generation;
+      if (k >= chunks) continue;  // this job has fewer chunks than workers
+      const auto* f = fn;
+      const std::size_t b = n * k / chunks, e = n * (k + 1) / chunks;
+      lock.unlock();
+      try {
+        (*f)(b, e);
+      } catch (...) {
+        std::lock_guard<std::mutex> g(m);
+        if (!first) first = std::current_exception();
+      }
+      std::lock_guard<std::mutex> g(m);
+      if (--pending == 0) done.notify_one();
+    }
+  }
+
+  // Same chunks as occseg::parallel_for with t = chunks: chunk k is [n k / t, n (k + 1) / t).
+  void run(std::size_t count, std::size_t t, const std::function<void(std::size_t, std::size_t)>& f) {
+    std::lock_guard<std::mutex> serial(call);
+    {
+      std::lock_guard<std::mutex> lock(m);
+      fn = &f;
+      n = count;
+      chunks = t;
+      pending = t - 1;
+      first = nullptr;
+      ++generation;
+    }
+    wake.notify_all();
+    std::exception_ptr mine;
+    try {
+      // A nested parallel_for inside chunk 0 must not wait for this (busy) pool.
+      const PoolScope none(nullptr);
+      f(0, count / t);
+    } catch (...) {
+      mine = std::current_exception();
+    }
+    std::unique_lock<std::mutex> lock(m);
+    done.wait(lock, [&] { return pending == 0; });
+    fn = nullptr;
+    if (mine) std::rethrow_exception(mine);
+    if (first) std::rethrow_exception(first);
+  }
+};
+
+Context::Context(int threads) : pool_(std::make_unique<Pool>()) {
+  if (threads < 0)
+    throw Error(Status::invalid_argument, "context threads = " + std::to_string(threads) + " is negative");
+  const int t = resolve_threads(threads);
+  try {
+    for (int k = 1; k < t; ++k) pool_->workers.emplace_back([p = pool_.get(), k] { p->work(static_cast<std::size_t>(k)); });
+  } catch (const std::system_error&) {
+    // Fewer threads than asked: the pool works with those it has.
+  }
+}
+
+Context::~Context() {
+  {
+    std::lock_guard<std::mutex> lock(pool_->m);
+    pool_->stop = true;
+  }
+  pool_->wake.notify_all();
+  for (auto& th : pool_->workers) th.join();
+}
+
+int Context::threads() const { return static_cast<int>(pool_->workers.size()) + 1; }
+
+void Context::parallel_for(std::size_t n, const std::function<void(std::size_t, std::size_t)>& fn) {
+  run_on_pool(this, n, threads(), fn);
+}
+
+void Context::run(const std::function<void()>& fn) {
+  const PoolScope scope(this);
+  fn();
+}
+
+// Called by occseg::parallel_for while a context is installed on this thread.
+void run_on_pool(Context* context, std::size_t n, int threads,
+                 const std::function<void(std::size_t, std::size_t)>& fn) {
+  if (n == 0) return;
+  std::size_t t = static_cast<std::size_t>(std::min(resolve_threads(threads), context->threads()));
+  if (t > n) t = n;
+  if (t <= 1) {
+    fn(0, n);
+    return;
+  }
+  context->pool_->run(n, t, fn);
+}
+
+Result segment(Context& context, const Grid& grid, const Params& params, bool keep_stages) {
+  Result r;
+  context.run([&] { r = segment(grid, params, keep_stages); });
+  return r;
+}
+
+void insert_scan(Context& context, OccupancyFusion& fusion, const Vec3& sensor, const float* xyz, std::size_t count,
+                 std::size_t stride_floats, int threads) {
+  context.run([&] { fusion.insert_scan(sensor, xyz, count, stride_floats, threads); });
+}
+
+}  // namespace occseg
