@@ -126,6 +126,9 @@ TEST(Output, TheCommandLeavesNothingWhenTheDiskFillsOrTheDirectoryIsUnwritable) 
   ASSERT_EQ(occseg_map_write(s.map, in.c_str()), OCCSEG_OK);
   auto run_cli = [&](const std::string& out, rlim_t limit, bool drop) {
     return limited(limit, drop, [&] {
+      // The unprivileged user may be unable to reach the build tree at all (a private
+      // checkout): then this case cannot be run here.
+      if (::access(OCCSEG_CLI, X_OK) != 0 || ::access(in.c_str(), R_OK) != 0) return 96;
       const int null = ::open("/dev/null", O_WRONLY);
       ::dup2(null, 1);
       ::dup2(null, 2);
@@ -146,6 +149,8 @@ TEST(Output, TheCommandLeavesNothingWhenTheDiskFillsOrTheDirectoryIsUnwritable) 
   }
   const std::string locked = dir + "/locked";
   fs::create_directories(locked);
-  EXPECT_EQ(run_cli(locked + "/out", 0, true), 2);
+  const int rc = run_cli(locked + "/out", 0, true);
+  if (rc == 96) GTEST_SKIP() << "an unprivileged user cannot reach " << OCCSEG_CLI;
+  EXPECT_EQ(rc, 2);
   EXPECT_FALSE(fs::exists(locked + "/out"));
 }
