@@ -1,6 +1,7 @@
 #include "occseg/fusion.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <emmintrin.h>
@@ -288,9 +289,16 @@ void OccupancyFusion::insert_scan(const Vec3& sensor, const float* xyz, std::siz
   const std::size_t chunk = progress_ ? std::size_t(1) << 16 : std::max<std::size_t>(count, 1);
   for (std::size_t c0 = 0; c0 < count; c0 += chunk) {
     const std::size_t c1 = std::min(count, c0 + chunk);
-    parallel_for(c1 - c0, threads, [&](std::size_t b, std::size_t e) {
+    // Threads take blocks of rays from a shared counter: ray lengths vary across a cloud (floor
+    // near, wall far), so fixed halves left one thread idle. Marks are ORed, so which thread
+    // walks which ray changes nothing.
+    constexpr std::size_t kBlock = 2048;
+    const std::size_t blocks = (c1 - c0 + kBlock - 1) / kBlock;
+    std::atomic<std::size_t> next{0};
+    parallel_for(std::min<std::size_t>(blocks, resolve_threads(threads)), threads, [&](std::size_t, std::size_t) {
       TouchBox mine;
-      walk_rays(c0 + b, c0 + e, mine);
+      for (std::size_t k; (k = next.fetch_add(1, std::memory_order_relaxed)) < blocks;)
+        walk_rays(c0 + k * kBlock, std::min(c1, c0 + (k + 1) * kBlock), mine);
       std::lock_guard<std::mutex> lock(box_mutex);
       box.merge(mine);
     });
