@@ -321,3 +321,20 @@ TEST(Fusion, CancelledScanLeavesNoMarksForTheNextScan) {
   for (float v : fu.log_odds()) touched += v != 0.0f;
   EXPECT_LT(touched, 200) << "only the two rays' voxels";
 }
+
+// Threads take blocks of 2048 rays from a shared counter: many blocks, uneven ray lengths, any
+// thread count, same map.
+TEST(Fusion, BlockScheduledThreadsDoNotChangeTheMap) {
+  std::vector<Vec3> pts;
+  for (int i = 0; i < 20000; ++i) {
+    const double r = 0.3 + (i / 2048 % 3) * 0.6;  // ray lengths change from block to block
+    pts.push_back({2.0 + std::cos(i * 0.013) * r, 2.0 + std::sin(i * 0.013) * r, 0.2 + (i % 11) * 0.25});
+  }
+  OccupancyFusion one(frame(40, 40, 30)), three(frame(40, 40, 30));
+  one.insert_scan({2.0, 2.0, 1.0}, pts, 1);
+  three.insert_scan({2.0, 2.0, 1.0}, pts, 3);
+  EXPECT_EQ(one.log_odds(), three.log_odds());
+  std::vector<float> expect(one.log_odds().size(), 0.0f);
+  reference_scan(one.frame(), SensorModel(), {2.0, 2.0, 1.0}, pts, expect);
+  EXPECT_EQ(three.log_odds(), expect);
+}
