@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <mutex>
 
 #if defined(__GLIBC__)
 #include <malloc.h>
@@ -55,6 +56,11 @@ class Stages {
 // voxel instead of the ~5 that are alive at any time (docs/performance.md).
 void release_freed_memory() {
 #if defined(__GLIBC__)
+  // Serialised: when glibc's malloc is not the process's allocator (sanitizers, jemalloc or
+  // tcmalloc hosts) it is still uninitialised, and two first calls at once race in its lazy
+  // setup (a crash found by Concurrency.ProgressIsReportedOnTheCallingThread under ASan).
+  static std::mutex trim;
+  std::lock_guard<std::mutex> lock(trim);
   malloc_trim(0);
 #endif
 }
