@@ -50,6 +50,12 @@ inline void require(const void* p, const char* name) {
   if (!p) throw Error(Status::invalid_argument, std::string("argument '") + name + "' is NULL");
 }
 
+// Throws Error(out_of_range) "index I is out of range (there are N <what>)".
+[[noreturn]] inline void index_out_of_range(std::size_t index, std::size_t count, const char* what) {
+  throw Error(Status::out_of_range, "index " + std::to_string(index) + " is out of range (there are " +
+                                        std::to_string(count) + " " + what + ")");
+}
+
 // Runs `body`; returns 0 and clears the error on success, or the status of whatever it threw.
 template <class Body>
 int guard(const char* function, Body&& body) noexcept {

@@ -14,6 +14,7 @@ using occseg::Error;
 using occseg::ParamInfo;
 using occseg::Status;
 using occseg::capi::guard;
+using occseg::capi::index_out_of_range;
 using occseg::capi::require;
 
 namespace {
@@ -202,9 +203,7 @@ int occseg_param_bounds(uint32_t index, double* min, double* max) {
     require(min, "min");
     require(max, "max");
     const ParamInfo* i = table_entry(index);
-    if (!i)
-      throw Error(Status::out_of_range, "index " + std::to_string(index) + " is out of range (there are " +
-                                            std::to_string(occseg_param_count()) + " parameters)");
+    if (!i) index_out_of_range(index, occseg_param_count(), "parameters");
     *min = i->min;
     *max = i->max;
   });

@@ -9,6 +9,7 @@
 using occseg::Error;
 using occseg::Status;
 using occseg::capi::guard;
+using occseg::capi::index_out_of_range;
 using occseg::capi::require;
 
 namespace {
@@ -121,9 +122,7 @@ int occseg_plugin_abi(uint32_t index, uint32_t* major, uint32_t* minor) {
     require(major, "major");
     require(minor, "minor");
     const auto* p = plugin_at(index);
-    if (!p)
-      throw Error(Status::out_of_range, "index " + std::to_string(index) + " is out of range (there are " +
-                                            std::to_string(occseg_plugin_count()) + " plugins)");
+    if (!p) index_out_of_range(index, occseg_plugin_count(), "plugins");
     *major = p->abi_major;
     *minor = p->abi_minor;
   });
@@ -170,9 +169,7 @@ const char* occseg_param_plugin(uint32_t index) {
 int occseg_param_default(uint32_t index, char* buf, size_t size, size_t* length) {
   return guard("occseg_param_default", [&] {
     const auto all = occseg::all_params();
-    if (index >= all.size())
-      throw Error(Status::out_of_range, "index " + std::to_string(index) + " is out of range (there are " +
-                                            std::to_string(all.size()) + " parameters)");
+    if (index >= all.size()) index_out_of_range(index, all.size(), "parameters");
     copy_text(occseg::param_default(all[index].name), buf, size, length);
   });
 }
