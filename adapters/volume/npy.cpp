@@ -144,20 +144,25 @@ Grid grid_from_npy(const NpyArray& a, double voxel_size, const std::string& name
   g.voxel_size = voxel_size;
   g.p.resize(d.count());
   const std::size_t n = d.count();
-  auto value = [&](std::size_t k) -> float {
-    const unsigned char* e = a.data.data();
-    if (a.descr == "<f4") { float v; std::memcpy(&v, e + 4 * k, 4); return v; }
-    if (a.descr == "<f8") { double v; std::memcpy(&v, e + 8 * k, 8); return static_cast<float>(v); }
-    if (a.descr == "<u2") { std::uint16_t v; std::memcpy(&v, e + 2 * k, 2); return static_cast<float>(v / 65535.0); }
-    return static_cast<float>(e[k] / 255.0);
+  // The element type is decided once, not per voxel: one copy loop per dtype.
+  auto convert = [&](auto value) {
+    if (!a.fortran_order) {
+      for (std::size_t i = 0; i < n; ++i) g.p[i] = value(i);
+    } else {  // file index of [z, y, x] is z + nz * (y + ny * x)
+      for (std::size_t z = 0, i = 0; z < d.nz; ++z)
+        for (std::size_t y = 0; y < d.ny; ++y)
+          for (std::size_t x = 0; x < d.nx; ++x, ++i) g.p[i] = value(z + d.nz * (y + d.ny * x));
+    }
   };
-  if (!a.fortran_order) {
-    for (std::size_t i = 0; i < n; ++i) g.p[i] = value(i);
-  } else {  // file index of [z, y, x] is z + nz * (y + ny * x)
-    for (std::size_t z = 0, i = 0; z < d.nz; ++z)
-      for (std::size_t y = 0; y < d.ny; ++y)
-        for (std::size_t x = 0; x < d.nx; ++x, ++i) g.p[i] = value(z + d.nz * (y + d.ny * x));
-  }
+  const unsigned char* e = a.data.data();
+  if (a.descr == "<f4")
+    convert([e](std::size_t k) { float v; std::memcpy(&v, e + 4 * k, 4); return v; });
+  else if (a.descr == "<f8")
+    convert([e](std::size_t k) { double v; std::memcpy(&v, e + 8 * k, 8); return static_cast<float>(v); });
+  else if (a.descr == "<u2")
+    convert([e](std::size_t k) { std::uint16_t v; std::memcpy(&v, e + 2 * k, 2); return static_cast<float>(v / 65535.0); });
+  else
+    convert([e](std::size_t k) { return static_cast<float>(e[k] / 255.0); });
   try {
     check_probabilities(g);
   } catch (const Error& e) {
