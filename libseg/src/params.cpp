@@ -26,6 +26,7 @@ Params Params::paper() {
   Params p;
   p.preset = Preset::paper;
   p.occupied_connectivity = 6;
+  p.support_plane = 0;
   return p;
 }
 
@@ -44,6 +45,7 @@ const std::vector<ParamInfo>& param_table() {
       {"refine_passes", "int", 0, 16, "passes of the six free/occupied refinement scans"},
       {"gap_radius", "int", 0, 16, "default preset: 0.5-voxels holding no (2r+1)^3 cube of 0.5 are gaps between rays"},
       {"occupied_connectivity", "int", 6, 26, "6 or 26: neighbours that join occupied voxels into one segment (default 26, paper 6)"},
+      {"support_plane", "int", 0, 1e9, "default preset: voxels of a plane (>= half its segment) that splits objects standing on it off their support; 0 = off"},
       {"threads", "int", 0, 1024, "worker threads, 0 = all cores; results never depend on it"},
       {"texture", "string", 0, 0, "texture operator by name: lbp6 (paper, 3D), lbp8 (3x3, 2D maps) or one a plugin adds"},
       {"similarity", "string", 0, 0, "histogram similarity of the division by name: g (eq. 1), chi2 or one a plugin adds"},
@@ -143,6 +145,7 @@ void Params::validate() const {
   check("occupied_connectivity", occupied_connectivity);
   if (occupied_connectivity != 6 && occupied_connectivity != 26)
     bad("occupied_connectivity", std::to_string(occupied_connectivity) + " is neither 6 nor 26");
+  check("support_plane", support_plane);
   check("threads", threads);
   if (!is_pow2(smax)) bad("smax", std::to_string(smax) + " is not a power of two");
   if (!is_pow2(smin)) bad("smin", std::to_string(smin) + " is not a power of two");
@@ -186,6 +189,7 @@ void set_param(Params& p, const std::string& name, const std::string& value) {
   else if (name == "refine_passes") p.refine_passes = static_cast<int>(v);
   else if (name == "gap_radius") p.gap_radius = static_cast<int>(v);
   else if (name == "occupied_connectivity") p.occupied_connectivity = static_cast<int>(v);
+  else if (name == "support_plane") p.support_plane = static_cast<int>(v);
   else if (name == "threads") p.threads = static_cast<int>(v);
 }
 
@@ -203,6 +207,7 @@ std::string get_param(const Params& p, const std::string& name) {
   else if (name == "refine_passes") o << p.refine_passes;
   else if (name == "gap_radius") o << p.gap_radius;
   else if (name == "occupied_connectivity") o << p.occupied_connectivity;
+  else if (name == "support_plane") o << p.support_plane;
   else if (name == "threads") o << p.threads;
   else if (name == "texture") o << p.texture;
   else if (name == "similarity") o << p.similarity;

@@ -13,6 +13,7 @@
 #include "occseg/departures.hpp"
 #include "occseg/error.hpp"
 #include "occseg/parallel.hpp"
+#include "occseg/planes.hpp"
 #include "occseg/refine.hpp"
 #include "occseg/registry.hpp"
 #include "occseg/texture.hpp"
@@ -123,6 +124,11 @@ Result segment(const Grid& grid, const Params& params, bool keep_stages) {
   release_freed_memory();
   st.begin("labelling");
   label_components(states, grid, r.labels, r.segments, params.threads, params.occupied_connectivity == 26);
+  states = std::vector<std::uint8_t>();
+  // Part of "labelling" for callers: it decides which connected regions are separate objects.
+  if (params.preset == Preset::default_preset && params.support_plane > 0)
+    split_support_planes(grid, r.labels, r.segments, static_cast<std::size_t>(params.support_plane),
+                         params.occupied_connectivity == 26);
   st.end();
   return r;
 }

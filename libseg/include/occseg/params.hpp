@@ -31,6 +31,10 @@ struct Params {
   // Connectivity of occupied segments: 26 (default preset: voxels touching at an edge or a corner
   // are one object, so thin sloping shells stay whole) or 6 (paper). Free and unknown: always 6.
   int occupied_connectivity = 26;
+  // default preset only: an occupied segment lying at least half on one plane of at least this
+  // many voxels (a table top, a floor) splits into the plane and the objects standing on its
+  // observed side (occseg/planes.hpp). 0: off (paper).
+  int support_plane = 256;
   int threads = 0;             // 0: all cores. Results never depend on it.
   std::string texture = "lbp6";     // texture operator, by name (occseg/registry.hpp)
   std::string similarity = "g";     // histogram similarity of the division, by name

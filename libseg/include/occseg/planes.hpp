@@ -1,0 +1,53 @@
+// Support planes: splits an occupied segment into the plane it mostly lies on (a table top, a
+// floor) and the objects standing on that plane's observed side (docs/algorithm.md, "Objects on a
+// support plane"). Touching objects of one state are one connected region, so labelling alone can
+// never separate a mug from the table it stands on.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "occseg/components.hpp"
+#include "occseg/grid.hpp"
+
+namespace occseg {
+
+// Inliers are voxels whose centre lies within this distance (voxel edges) of the plane: half the
+// thickness of a 26-connected digital plane (sqrt(3)/2), so the layer of an object resting on an
+// axis-aligned plane, one voxel away, is never an inlier.
+constexpr double kPlaneInlierDistance = 0.866;
+// Pieces smaller than this (a 3 x 3 x 3 cube), or rising less than kMinObjectHeight voxel edges
+// above the plane, are the plane's own noise (a range sensor's surface is a few voxels thick) and
+// stay with it.
+constexpr std::size_t kMinObjectVoxels = 27;
+constexpr double kMinObjectHeight = 3.0;
+// ... and rising less than this many times the robust spread (sigma) of the plane's surface.
+constexpr double kNoiseHeights = 5.0;
+
+// A plane n . x = d in voxel-index coordinates (voxel centres at integer x, y, z), |n| = 1.
+struct Plane {
+  std::array<double, 3> n{0, 0, 1};
+  double d = 0;
+  double distance(double x, double y, double z) const { return n[0] * x + n[1] * y + n[2] * z - d; }
+};
+
+// The plane that most of `points` lie on: deterministic MSAC (RANSAC scoring squared distances
+// capped at kPlaneInlierDistance) over at most 4096 of them (the generator is seeded with `seed`),
+// refined by least-squares fits to the inliers. `inliers` receives how many of all points are within kPlaneInlierDistance of the
+// result. Returns false for fewer than 3 points or when all are collinear.
+bool fit_dominant_plane(const std::vector<std::array<double, 3>>& points, std::uint64_t seed, Plane& plane,
+                        std::size_t& inliers);
+
+// Splits every occupied segment with at least `min_plane` voxels whose dominant plane holds at
+// least `min_plane` of them and at least half of them. Pieces of the rest (connected as
+// `occupied26` says) that lie on the plane's open side (the side its voxels see free space on), have
+// at least kMinObjectVoxels voxels and rise at least max(kMinObjectHeight, kNoiseHeights x sigma)
+// above it (sigma: the robust spread of the surface along the normal) become new segments, numbered after all existing ones in the
+// order of their first voxel; everything else (the plane, pieces on its far side such as a table's
+// legs, small pieces) stays in the segment, which keeps its id if it stays connected (further
+// components get new ids too). Statistics of changed segments are recomputed. Runs on one thread,
+// segment by segment, so results never depend on the thread count.
+void split_support_planes(const Grid& grid, std::vector<std::uint32_t>& labels, std::vector<Segment>& segments,
+                          std::size_t min_plane, bool occupied26);
+
+}  // namespace occseg

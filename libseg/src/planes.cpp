@@ -1,0 +1,419 @@
+#include "occseg/planes.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace occseg {
+
+namespace {
+
+using Vec = std::array<double, 3>;
+
+Vec sub(const Vec& a, const Vec& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+Vec cross(const Vec& a, const Vec& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+double dot(const Vec& a, const Vec& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+// splitmix64: a fixed, portable sequence, so a map splits the same way on every machine.
+struct Rng {
+  std::uint64_t s;
+  std::uint64_t next() {
+    std::uint64_t z = (s += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  }
+  std::size_t below(std::size_t n) { return static_cast<std::size_t>(next() % n); }
+};
+
+// Eigenvector of the smallest eigenvalue of a symmetric 3 x 3 matrix (cyclic Jacobi rotations):
+// the normal of the least-squares plane through points with that scatter matrix.
+Vec smallest_eigenvector(double a[3][3]) {
+  double v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (int sweep = 0; sweep < 50; ++sweep) {
+    const double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+    if (off < 1e-30) break;
+    for (int p = 0; p < 2; ++p)
+      for (int q = p + 1; q < 3; ++q) {
+        if (a[p][q] == 0) continue;
+        const double theta = (a[q][q] - a[p][p]) / (2 * a[p][q]);
+        const double t = (theta >= 0 ? 1.0 : -1.0) / (std::fabs(theta) + std::sqrt(theta * theta + 1));
+        const double c = 1 / std::sqrt(t * t + 1), s = t * c;
+        for (int k = 0; k < 3; ++k) {  // a <- a J (columns p, q)
+          const double akp = a[k][p], akq = a[k][q];
+          a[k][p] = c * akp - s * akq;
+          a[k][q] = s * akp + c * akq;
+        }
+        for (int k = 0; k < 3; ++k) {  // a <- J^T a (rows p, q)
+          const double apk = a[p][k], aqk = a[q][k];
+          a[p][k] = c * apk - s * aqk;
+          a[q][k] = s * apk + c * aqk;
+        }
+        for (int k = 0; k < 3; ++k) {
+          const double vkp = v[k][p], vkq = v[k][q];
+          v[k][p] = c * vkp - s * vkq;
+          v[k][q] = s * vkp + c * vkq;
+        }
+      }
+  }
+  int m = 0;
+  for (int k = 1; k < 3; ++k)
+    if (a[k][k] < a[m][m]) m = k;
+  return {v[0][m], v[1][m], v[2][m]};
+}
+
+std::size_t count_inliers(const std::vector<Vec>& pts, const Plane& pl) {
+  std::size_t c = 0;
+  for (const Vec& p : pts) c += std::fabs(pl.distance(p[0], p[1], p[2])) <= kPlaneInlierDistance;
+  return c;
+}
+
+// MSAC cost: squared distances, capped at the inlier distance. Counting inliers alone would
+// prefer a slightly tilted plane that also grazes a few voxels of the layer above it.
+double cost(const std::vector<Vec>& pts, const Plane& pl) {
+  constexpr double cap = kPlaneInlierDistance * kPlaneInlierDistance;
+  double c = 0;
+  for (const Vec& p : pts) {
+    const double e = pl.distance(p[0], p[1], p[2]);
+    c += std::min(e * e, cap);
+  }
+  return c;
+}
+
+// Least-squares plane through the points within kPlaneInlierDistance of `pl`; false if degenerate.
+bool refit(const std::vector<Vec>& pts, const Plane& pl, Plane& out) {
+  Vec mean{0, 0, 0};
+  std::size_t n = 0;
+  for (const Vec& p : pts)
+    if (std::fabs(pl.distance(p[0], p[1], p[2])) <= kPlaneInlierDistance) {
+      for (int k = 0; k < 3; ++k) mean[k] += p[k];
+      ++n;
+    }
+  if (n < 3) return false;
+  for (double& m : mean) m /= double(n);
+  double c[3][3] = {};
+  for (const Vec& p : pts)
+    if (std::fabs(pl.distance(p[0], p[1], p[2])) <= kPlaneInlierDistance) {
+      const Vec q = sub(p, mean);
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) c[i][j] += q[i] * q[j];
+    }
+  const Vec nrm = smallest_eigenvector(c);
+  const double len = std::sqrt(dot(nrm, nrm));
+  if (!(len > 0.5)) return false;
+  out.n = {nrm[0] / len, nrm[1] / len, nrm[2] / len};
+  out.d = dot(out.n, mean);
+  return true;
+}
+
+}  // namespace
+
+bool fit_dominant_plane(const std::vector<Vec>& points, std::uint64_t seed, Plane& plane, std::size_t& inliers) {
+  inliers = 0;
+  if (points.size() < 3) return false;
+  // Hypotheses are scored on an evenly strided sample: a plane holding a fraction f of the points
+  // holds about f of the sample, and scoring costs no more for a floor of a million voxels.
+  constexpr std::size_t kSample = 4096;
+  std::vector<Vec> sample;
+  if (points.size() <= kSample) sample = points;
+  else
+    for (std::size_t i = 0; i < kSample; ++i) sample.push_back(points[i * points.size() / kSample]);
+  Rng rng{seed};
+  Plane best;
+  double best_cost = std::numeric_limits<double>::infinity();
+  // 256 draws of 3 points: a plane holding half the points is drawn with probability
+  // 1 - (7/8)^256 > 1 - 1e-14.
+  for (int it = 0; it < 256; ++it) {
+    const Vec& a = sample[rng.below(sample.size())];
+    const Vec& b = sample[rng.below(sample.size())];
+    const Vec& c = sample[rng.below(sample.size())];
+    const Vec nrm = cross(sub(b, a), sub(c, a));
+    const double len = std::sqrt(dot(nrm, nrm));
+    if (len < 1e-9) continue;  // a repeated or collinear draw
+    Plane h;
+    h.n = {nrm[0] / len, nrm[1] / len, nrm[2] / len};
+    h.d = dot(h.n, a);
+    const double score = cost(sample, h);
+    if (score < best_cost) best_cost = score, best = h;
+  }
+  if (!std::isfinite(best_cost)) return false;
+  best_cost = cost(points, best);
+  // Two least-squares refits: the best draw passes through three noisy voxels, the fit through
+  // all its inliers sits in the middle of a thick layer.
+  for (int r = 0; r < 2; ++r) {
+    Plane fit;
+    if (!refit(points, best, fit)) break;
+    const double c = cost(points, fit);
+    if (!(c < best_cost)) break;
+    best = fit, best_cost = c;
+  }
+  plane = best;
+  inliers = count_inliers(points, best);
+  return true;
+}
+
+namespace {
+
+// One pass of the split over segment `s`; state shared between its steps.
+class Splitter {
+ public:
+  Splitter(const Grid& g, std::vector<std::uint32_t>& labels, std::vector<Segment>& segments, bool occupied26)
+      : g_(g), d_(g.dims), labels_(labels), segs_(segments), conn26_(occupied26) {}
+
+  void run(std::uint32_t s, std::size_t min_plane) {
+    const Segment seg = segs_[s];
+    if (seg.state != State::occupied || seg.voxels < min_plane + kMinObjectVoxels) return;
+    // Temporary labels count down from the top of the id range; they must stay above every id.
+    if (segs_.size() + 2 * seg.voxels + 2 >= std::numeric_limits<std::uint32_t>::max()) return;
+    collect(s);
+    Plane pl;
+    std::size_t inliers = 0;
+    if (!fit_dominant_plane(pts_, 0x6F6363736567ull ^ (std::uint64_t(members_[0]) * 0x9E3779B97F4A7C15ull), pl,
+                            inliers) ||
+        inliers < min_plane || 2 * inliers < members_.size())
+      return;
+    const int open = open_side(s, pl);
+    if (open == 0) return;
+    plane_ = pl;
+    const double min_height = std::max(kMinObjectHeight, kNoiseHeights * surface_sigma(pl));
+    make_pieces(s);
+    std::vector<std::size_t> split;
+    for (std::size_t k = 0; k < pieces_.size(); ++k) {
+      const Piece& p = pieces_[k];
+      const double height = open > 0 ? p.distance_max : -p.distance_min;
+      if (!p.on_plane && p.voxels >= kMinObjectVoxels && open * p.distance_sum > 0 && height >= min_height)
+        split.push_back(k);
+    }
+    if (split.empty()) {
+      for (std::uint32_t v : members_) labels_[v] = s;
+      return;
+    }
+    relabel(s, split);
+  }
+
+ private:
+  struct Piece {
+    bool on_plane;
+    std::size_t voxels = 0;
+    double distance_sum = 0;
+    double distance_min = std::numeric_limits<double>::infinity(), distance_max = -distance_min;
+    std::uint32_t first = 0;
+  };
+  static constexpr std::uint32_t kKeep = std::numeric_limits<std::uint32_t>::max();
+  static std::uint32_t temp(std::size_t k) { return kKeep - 1 - static_cast<std::uint32_t>(k); }
+
+  Vec coords(std::size_t i) const {
+    return {double(i % d_.nx), double((i / d_.nx) % d_.ny), double(i / (d_.nx * d_.ny))};
+  }
+  bool on_plane(std::size_t i) const {
+    const Vec c = coords(i);
+    return std::fabs(plane_.distance(c[0], c[1], c[2])) <= kPlaneInlierDistance;
+  }
+
+  void collect(std::uint32_t s) {
+    const Segment& seg = segs_[s];
+    members_.clear();
+    pts_.clear();
+    for (std::size_t z = seg.bbox_min[2]; z <= seg.bbox_max[2]; ++z)
+      for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1]; ++y)
+        for (std::size_t x = seg.bbox_min[0]; x <= seg.bbox_max[0]; ++x) {
+          const std::size_t i = g_.index(x, y, z);
+          if (labels_[i] != s) continue;
+          members_.push_back(static_cast<std::uint32_t>(i));
+          pts_.push_back({double(x), double(y), double(z)});
+        }
+  }
+
+  // +1 or -1: the side of the plane (along n) on which its voxels see free space, counted one to
+  // three voxels away along the normal, past the plane's own thickness; 0 when neither side has
+  // at least twice the free sightings of the other (a plane seen from both sides, or not at all).
+  int open_side(std::uint32_t s, const Plane& pl) const {
+    std::size_t seen[2] = {0, 0};
+    for (std::size_t m = 0; m < members_.size(); ++m) {
+      const Vec& c = pts_[m];
+      if (std::fabs(pl.distance(c[0], c[1], c[2])) > kPlaneInlierDistance) continue;
+      for (int side = 0; side < 2; ++side) {
+        const double sign = side == 0 ? 1.0 : -1.0;
+        for (int step = 1; step <= 3; ++step) {
+          std::size_t w;
+          if (!voxel_at(c, sign * step, pl.n, w)) break;
+          if (labels_[w] == s) continue;
+          seen[side] += segs_[labels_[w]].state == State::free;
+          break;
+        }
+      }
+    }
+    if (seen[0] > 0 && seen[0] >= 2 * seen[1]) return 1;
+    if (seen[1] > 0 && seen[1] >= 2 * seen[0]) return -1;
+    return 0;
+  }
+
+  // Robust spread of the plane's surface along its normal: 1.4826 x the median |distance| of the
+  // voxels within 4 voxel edges of it (a normal distribution's sigma; objects far above do not
+  // count).
+  double surface_sigma(const Plane& pl) const {
+    std::vector<double> near;
+    for (const Vec& c : pts_) {
+      const double e = std::fabs(pl.distance(c[0], c[1], c[2]));
+      if (e <= 4.0) near.push_back(e);
+    }
+    if (near.empty()) return 0;
+    std::nth_element(near.begin(), near.begin() + near.size() / 2, near.end());
+    return 1.4826 * near[near.size() / 2];
+  }
+
+  bool voxel_at(const Vec& c, double t, const Vec& n, std::size_t& out) const {
+    const double q[3] = {std::round(c[0] + t * n[0]), std::round(c[1] + t * n[1]), std::round(c[2] + t * n[2])};
+    const double lim[3] = {double(d_.nx), double(d_.ny), double(d_.nz)};
+    for (int k = 0; k < 3; ++k)
+      if (q[k] < 0 || q[k] >= lim[k]) return false;
+    out = g_.index(std::size_t(q[0]), std::size_t(q[1]), std::size_t(q[2]));
+    return true;
+  }
+
+  // Calls f(neighbour index) for the 6 or 26 neighbours of voxel i inside the grid.
+  template <class F>
+  void for_neighbours(std::size_t i, F&& f) const {
+    const std::size_t x = i % d_.nx, y = (i / d_.nx) % d_.ny, z = i / (d_.nx * d_.ny);
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int off = std::abs(dx) + std::abs(dy) + std::abs(dz);
+          if (off == 0 || (!conn26_ && off != 1)) continue;
+          if ((dx < 0 && x == 0) || (dx > 0 && x + 1 == d_.nx) || (dy < 0 && y == 0) || (dy > 0 && y + 1 == d_.ny) ||
+              (dz < 0 && z == 0) || (dz > 0 && z + 1 == d_.nz))
+            continue;
+          f(g_.index(x + dx, y + dy, z + dz));
+        }
+  }
+
+  // Flood-fills the voxels labelled `from` that `same(seed, voxel)` accepts, from `seed`, writing
+  // `to`; returns the voxels filled.
+  template <class Same, class Visit>
+  void flood(std::uint32_t seed, std::uint32_t from, std::uint32_t to, Same&& same, Visit&& visit) {
+    stack_.assign(1, seed);
+    labels_[seed] = to;
+    while (!stack_.empty()) {
+      const std::uint32_t v = stack_.back();
+      stack_.pop_back();
+      visit(v);
+      for_neighbours(v, [&](std::size_t w) {
+        if (labels_[w] == from && same(w)) {
+          labels_[w] = to;
+          stack_.push_back(static_cast<std::uint32_t>(w));
+        }
+      });
+    }
+  }
+
+  // Connected pieces of the plane's inliers and of the rest, each labelled temp(k).
+  void make_pieces(std::uint32_t s) {
+    pieces_.clear();
+    for (std::uint32_t v : members_) {
+      if (labels_[v] != s) continue;
+      Piece p;
+      p.on_plane = on_plane(v);
+      p.first = v;
+      const bool cls = p.on_plane;
+      flood(v, s, temp(pieces_.size()), [&](std::size_t w) { return on_plane(w) == cls; },
+            [&](std::uint32_t w) {
+              const Vec c = coords(w);
+              const double dist = plane_.distance(c[0], c[1], c[2]);
+              ++p.voxels;
+              p.distance_sum += dist;
+              p.distance_min = std::min(p.distance_min, dist);
+              p.distance_max = std::max(p.distance_max, dist);
+            });
+      pieces_.push_back(p);
+    }
+  }
+
+  // Split pieces and the connected components of what stays get their final ids: the component
+  // holding the segment's first voxel keeps `s`, the others are appended in order of first voxel.
+  void relabel(std::uint32_t s, const std::vector<std::size_t>& split) {
+    std::vector<char> is_split(pieces_.size(), 0);
+    for (std::size_t k : split) is_split[k] = 1;
+    for (std::uint32_t v : members_)
+      if (!is_split[kKeep - 1 - labels_[v]]) labels_[v] = kKeep;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> parts;  // (first voxel, temporary label)
+    for (std::size_t k : split) parts.push_back({pieces_[k].first, temp(k)});
+    std::size_t next = pieces_.size();
+    for (std::uint32_t v : members_) {
+      if (labels_[v] != kKeep) continue;
+      parts.push_back({v, temp(next)});
+      flood(v, kKeep, temp(next), [](std::size_t) { return true; }, [](std::uint32_t) {});
+      ++next;
+    }
+    std::sort(parts.begin(), parts.end());
+    // The first kept component (it holds the first kept voxel) keeps the id; it is never empty:
+    // the plane's inliers stay.
+    std::vector<std::uint32_t> final_id(next, s);
+    for (const auto& part : parts) {
+      const std::size_t k = kKeep - 1 - part.second;
+      if (k == pieces_.size()) continue;
+      final_id[k] = static_cast<std::uint32_t>(segs_.size());
+      Segment fresh;
+      fresh.id = final_id[k];
+      fresh.state = State::occupied;
+      segs_.push_back(fresh);
+    }
+    for (std::uint32_t v : members_) labels_[v] = final_id[kKeep - 1 - labels_[v]];
+    recompute_statistics(s);
+  }
+
+  // Voxel count, mean occupancy, box and centroid of `s` and of the segments just appended, summed
+  // in scan order.
+  void recompute_statistics(std::uint32_t s) {
+    struct Sum {
+      std::uint64_t n = 0;
+      double p = 0, c[3] = {0, 0, 0};
+      std::array<std::uint32_t, 3> lo{~0u, ~0u, ~0u}, hi{0, 0, 0};
+    };
+    std::vector<Sum> sums(segs_.size());
+    for (std::size_t m = 0; m < members_.size(); ++m) {
+      Sum& t = sums[labels_[members_[m]]];
+      ++t.n;
+      t.p += g_.p[members_[m]];
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t q = static_cast<std::uint32_t>(pts_[m][k]);
+        t.c[k] += pts_[m][k];
+        t.lo[k] = std::min(t.lo[k], q);
+        t.hi[k] = std::max(t.hi[k], q);
+      }
+    }
+    for (std::size_t id = 0; id < sums.size(); ++id) {
+      const Sum& t = sums[id];
+      if (id != s && t.n == 0) continue;
+      Segment& seg = segs_[id];
+      seg.voxels = t.n;
+      seg.mop = t.p / double(t.n);
+      seg.bbox_min = t.lo;
+      seg.bbox_max = t.hi;
+      for (int k = 0; k < 3; ++k) seg.centroid[k] = t.c[k] / double(t.n);
+    }
+  }
+
+  const Grid& g_;
+  const Dims d_;
+  std::vector<std::uint32_t>& labels_;
+  std::vector<Segment>& segs_;
+  const bool conn26_;
+  Plane plane_;
+  std::vector<std::uint32_t> members_, stack_;
+  std::vector<Vec> pts_;
+  std::vector<Piece> pieces_;
+};
+
+}  // namespace
+
+void split_support_planes(const Grid& grid, std::vector<std::uint32_t>& labels, std::vector<Segment>& segments,
+                          std::size_t min_plane, bool occupied26) {
+  if (min_plane == 0) return;
+  Splitter splitter(grid, labels, segments, occupied26);
+  const std::size_t original = segments.size();
+  for (std::size_t s = 0; s < original; ++s) splitter.run(static_cast<std::uint32_t>(s), min_plane);
+}
+
+}  // namespace occseg

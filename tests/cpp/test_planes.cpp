@@ -1,0 +1,221 @@
+// The support-plane split (occseg/planes.hpp) on hand-built scenes whose answer is known voxel by
+// voxel: a floor with things standing on it, a table with legs under it, a lone box, a tilted
+// plane.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <set>
+
+#include "occseg/planes.hpp"
+#include "occseg/segment.hpp"
+
+using namespace occseg;
+
+namespace {
+
+// A map of three states (0 free, 1 unknown, 2 occupied) given by a function of the voxel.
+struct Scene {
+  Grid grid;
+  std::vector<std::uint8_t> states;
+  Scene(Dims d, const std::function<int(int, int, int)>& state) : grid(d, 0.5f) {
+    states.resize(d.count());
+    for (std::size_t z = 0; z < d.nz; ++z)
+      for (std::size_t y = 0; y < d.ny; ++y)
+        for (std::size_t x = 0; x < d.nx; ++x) {
+          const std::size_t i = grid.index(x, y, z);
+          states[i] = static_cast<std::uint8_t>(state(int(x), int(y), int(z)));
+          grid.p[i] = states[i] == 2 ? 0.9f : (states[i] == 1 ? 0.5f : 0.1f);
+        }
+  }
+  // Labels as the pipeline's last stage makes them, then the split.
+  void label_and_split(std::size_t min_plane, bool conn26 = true) {
+    label_components(states, grid, labels, segments, 1, conn26);
+    before = segments.size();
+    split_support_planes(grid, labels, segments, min_plane, conn26);
+  }
+  std::uint32_t at(int x, int y, int z) const { return labels[grid.index(x, y, z)]; }
+  // Ids of the voxels for which `pick` is true.
+  std::set<std::uint32_t> ids(const std::function<bool(int, int, int)>& pick) const {
+    std::set<std::uint32_t> s;
+    for (std::size_t z = 0; z < grid.dims.nz; ++z)
+      for (std::size_t y = 0; y < grid.dims.ny; ++y)
+        for (std::size_t x = 0; x < grid.dims.nx; ++x)
+          if (pick(int(x), int(y), int(z))) s.insert(labels[grid.index(x, y, z)]);
+    return s;
+  }
+  std::vector<std::uint32_t> labels;
+  std::vector<Segment> segments;
+  std::size_t before = 0;
+};
+
+bool in_box(int x, int y, int z, int x0, int y0, int z0, int x1, int y1, int z1) {
+  return x >= x0 && x <= x1 && y >= y0 && y <= y1 && z >= z0 && z <= z1;
+}
+
+// A 30 x 30 floor at z = 2 (unknown below, free above) with a 4 x 4 x 5 box on it at z = 3..7.
+int floor_with_box(int x, int y, int z) {
+  if (z == 2) return 2;
+  if (z < 2) return 1;
+  return in_box(x, y, z, 10, 12, 3, 13, 15, 7) ? 2 : 0;
+}
+
+}  // namespace
+
+TEST(Planes, FitFindsTheDominantPlaneAndCountsItsInliers) {
+  std::vector<std::array<double, 3>> pts;
+  for (int x = 0; x < 20; ++x)
+    for (int y = 0; y < 20; ++y) pts.push_back({double(x), double(y), 5.0});
+  for (int k = 0; k < 150; ++k) pts.push_back({double(k % 7), double(k % 11), 6.0 + k % 13});  // off the plane
+  Plane pl;
+  std::size_t inliers = 0;
+  ASSERT_TRUE(fit_dominant_plane(pts, 1, pl, inliers));
+  EXPECT_EQ(inliers, 400u);
+  EXPECT_NEAR(std::fabs(pl.n[2]), 1.0, 1e-9);
+  EXPECT_NEAR(pl.distance(3, 4, 5), 0.0, 1e-9);
+  // A digital plane x + 2y + 4z = 60 (centres rounded in z): the least-squares normal is its own.
+  pts.clear();
+  for (int x = 0; x < 40; ++x)
+    for (int y = 0; y < 30; ++y) pts.push_back({double(x), double(y), std::round((60.0 - x - 2.0 * y) / 4.0)});
+  ASSERT_TRUE(fit_dominant_plane(pts, 7, pl, inliers));
+  EXPECT_EQ(inliers, pts.size());
+  const double len = std::sqrt(21.0), sign = pl.n[2] > 0 ? 1 : -1;
+  EXPECT_NEAR(sign * pl.n[0], 1 / len, 0.01);
+  EXPECT_NEAR(sign * pl.n[1], 2 / len, 0.01);
+  EXPECT_NEAR(sign * pl.n[2], 4 / len, 0.01);
+  // Degenerate input.
+  EXPECT_FALSE(fit_dominant_plane({{0, 0, 0}, {1, 1, 1}}, 1, pl, inliers));
+  EXPECT_FALSE(fit_dominant_plane({{0, 0, 0}, {1, 1, 1}, {2, 2, 2}, {3, 3, 3}}, 1, pl, inliers));
+}
+
+TEST(Planes, BoxStandingOnAFloorBecomesItsOwnSegment) {
+  Scene s(Dims{30, 30, 12}, floor_with_box);
+  s.label_and_split(256);
+  ASSERT_EQ(s.segments.size(), s.before + 1) << "one new segment";
+  const std::uint32_t floor_id = s.at(0, 0, 2), box_id = s.at(10, 12, 3);
+  EXPECT_EQ(box_id, s.before) << "new segments are numbered after the existing ones";
+  EXPECT_EQ(s.ids([](int, int, int z) { return z == 2; }), std::set<std::uint32_t>{floor_id});
+  EXPECT_EQ(s.ids([](int x, int y, int z) { return z > 2 && in_box(x, y, z, 10, 12, 3, 13, 15, 7); }),
+            std::set<std::uint32_t>{box_id});
+  const Segment& f = s.segments[floor_id];
+  const Segment& b = s.segments[box_id];
+  EXPECT_EQ(f.voxels, 900u);
+  EXPECT_EQ(b.voxels, 80u);
+  EXPECT_EQ(b.id, box_id);
+  EXPECT_EQ(b.state, State::occupied);
+  EXPECT_NEAR(b.mop, 0.9, 1e-6);
+  EXPECT_EQ(b.bbox_min, (std::array<std::uint32_t, 3>{10, 12, 3}));
+  EXPECT_EQ(b.bbox_max, (std::array<std::uint32_t, 3>{13, 15, 7}));
+  EXPECT_DOUBLE_EQ(b.centroid[0], 11.5);
+  EXPECT_DOUBLE_EQ(b.centroid[2], 5.0);
+  EXPECT_EQ(f.bbox_min, (std::array<std::uint32_t, 3>{0, 0, 2}));
+  EXPECT_EQ(f.bbox_max, (std::array<std::uint32_t, 3>{29, 29, 2}));
+  EXPECT_DOUBLE_EQ(f.centroid[0], 14.5);
+  // Other segments are untouched.
+  EXPECT_EQ(s.segments[s.at(0, 0, 0)].voxels, 1800u);
+}
+
+TEST(Planes, OffSmallPlanesAndSmallBumpsDoNotSplit) {
+  {
+    Scene s(Dims{30, 30, 12}, floor_with_box);
+    s.label_and_split(0);
+    EXPECT_EQ(s.segments.size(), s.before);
+    EXPECT_EQ(s.at(0, 0, 2), s.at(10, 12, 3));
+  }
+  {
+    Scene s(Dims{30, 30, 12}, floor_with_box);
+    s.label_and_split(901);  // the floor holds 900 voxels
+    EXPECT_EQ(s.segments.size(), s.before);
+  }
+  {
+    // A 2 x 2 x 2 bump (8 voxels < kMinObjectVoxels) is noise on the floor.
+    Scene s(Dims{30, 30, 12}, [](int x, int y, int z) {
+      if (z == 2) return 2;
+      if (z < 2) return 1;
+      return in_box(x, y, z, 5, 5, 3, 6, 6, 4) ? 2 : 0;
+    });
+    s.label_and_split(256);
+    EXPECT_EQ(s.segments.size(), s.before);
+    EXPECT_EQ(s.at(5, 5, 4), s.at(0, 0, 2));
+  }
+}
+
+TEST(Planes, LegsUnderATableStayWithItsTopAndAMugOnItSplits) {
+  // A top at z = 8 (x 2..27, y 2..21) on four 2 x 2 legs (z 0..7); a 3 x 3 x 4 mug on the top.
+  // Sensors above: free above and around, the space under the top unknown.
+  const auto table = [](int x, int y, int z, bool mug) {
+    const bool top = z == 8 && in_box(x, y, z, 2, 2, 8, 27, 21, 8);
+    bool leg = false;
+    for (int lx : {3, 25})
+      for (int ly : {3, 19}) leg = leg || in_box(x, y, z, lx, ly, 0, lx + 1, ly + 1, 7);
+    if (top || leg || (mug && in_box(x, y, z, 12, 10, 9, 14, 12, 12))) return 2;
+    return (z < 8 && in_box(x, y, z, 2, 2, 0, 27, 21, 7)) ? 1 : 0;
+  };
+  {
+    Scene s(Dims{30, 24, 14}, [&](int x, int y, int z) { return table(x, y, z, false); });
+    s.label_and_split(256);
+    EXPECT_EQ(s.segments.size(), s.before) << "legs are on the far side of the top";
+    EXPECT_EQ(s.at(3, 3, 0), s.at(10, 10, 8));
+  }
+  Scene s(Dims{30, 24, 14}, [&](int x, int y, int z) { return table(x, y, z, true); });
+  s.label_and_split(256);
+  ASSERT_EQ(s.segments.size(), s.before + 1);
+  const std::uint32_t top = s.at(10, 10, 8), mug = s.at(12, 10, 9);
+  EXPECT_NE(top, mug);
+  EXPECT_EQ(s.at(3, 3, 0), top);
+  EXPECT_EQ(s.at(26, 20, 4), top);
+  EXPECT_EQ(s.ids([](int x, int y, int z) { return in_box(x, y, z, 12, 10, 9, 14, 12, 12); }),
+            std::set<std::uint32_t>{mug});
+  EXPECT_EQ(s.segments[mug].voxels, 36u);
+  EXPECT_EQ(s.segments[top].voxels, 26u * 20 + 4 * 4 * 8);
+}
+
+TEST(Planes, ABoxOnItsOwnIsNotSplitAtItsTopFace) {
+  // A solid 8 x 8 x 8 box in free space: its top face holds 64 of 512 voxels.
+  Scene s(Dims{16, 16, 16}, [](int x, int y, int z) { return in_box(x, y, z, 4, 4, 0, 11, 11, 7) ? 2 : 0; });
+  s.label_and_split(16);
+  EXPECT_EQ(s.segments.size(), s.before);
+  // A thin slab seen from both sides (free above and below) has no support side.
+  Scene t(Dims{30, 30, 12}, [](int x, int y, int z) {
+    return z == 5 || in_box(x, y, z, 10, 10, 6, 13, 13, 9) ? 2 : 0;
+  });
+  t.label_and_split(256);
+  EXPECT_EQ(t.segments.size(), t.before);
+}
+
+TEST(Planes, TiltedPlaneAndSixConnectivity) {
+  // The digital plane z = round((x + 2y) / 8) + 2 (unknown below, free above) with a 4 x 4 x 6
+  // block standing on it; 6-connectivity, so the thick digital plane is still one region.
+  const auto ground = [](int x, int y) { return int(std::lround((x + 2.0 * y) / 8.0)) + 2; };
+  Scene s(Dims{32, 32, 16}, [&](int x, int y, int z) {
+    const int gz = ground(x, y);
+    if (z == gz || (z < gz && z >= gz - 1)) return 2;  // two layers: 6-connected across steps
+    if (z < gz) return 1;
+    return (in_box(x, y, z, 8, 8, 0, 11, 11, 15) && z <= ground(8, 8) + 6) ? 2 : 0;
+  });
+  s.label_and_split(256, false);
+  ASSERT_EQ(s.segments.size(), s.before + 1);
+  const std::uint32_t ground_id = s.at(0, 0, ground(0, 0)), block = s.at(9, 9, ground(8, 8) + 5);
+  EXPECT_NE(ground_id, block);
+  EXPECT_EQ(s.at(31, 31, ground(31, 31)), ground_id);
+  EXPECT_EQ(s.segments[block].state, State::occupied);
+  EXPECT_GE(s.segments[block].voxels, 4u * 4 * 4);
+}
+
+TEST(Planes, PipelineSplitsInTheDefaultPresetOnly) {
+  Scene s(Dims{30, 30, 12}, floor_with_box);
+  const Result d = segment(s.grid);
+  EXPECT_NE(d.labels[s.grid.index(0, 0, 2)], d.labels[s.grid.index(10, 12, 5)]);
+  const Result p = segment(s.grid, Params::paper());
+  EXPECT_EQ(p.labels[s.grid.index(0, 0, 2)], p.labels[s.grid.index(10, 12, 5)]);
+  Params off = Params::defaults();
+  off.support_plane = 0;
+  const Result o = segment(s.grid, off);
+  EXPECT_EQ(o.labels[s.grid.index(0, 0, 2)], o.labels[s.grid.index(10, 12, 5)]);
+  // Threads never matter.
+  for (int t : {1, 2, 3}) {
+    Params q = Params::defaults();
+    q.threads = t;
+    EXPECT_EQ(segment(s.grid, q).labels, d.labels) << t;
+  }
+}
