@@ -1,6 +1,7 @@
 #include "occseg/departures.hpp"
 
 #include <algorithm>
+#include <mutex>
 
 #include "occseg/parallel.hpp"
 #include "occseg/refine.hpp"
@@ -77,23 +78,33 @@ inline std::uint8_t rule(std::uint8_t s, std::uint8_t o, std::uint8_t region, bo
   return o != kUnknown ? o : (region ? kUnknown : gap);
 }
 
+// Applies the rules to one row and returns whether it holds a seed of the gap flood (a gap voxel
+// the rules left unknown that touches an occupied voxel), so that only those rows are searched
+// for seeds. Branch-free, so the whole row vectorises.
 __attribute__((target_clones("avx2", "default")))
-void rules_row(std::uint8_t* __restrict st, const std::uint8_t* __restrict own, const std::uint8_t* __restrict region,
+bool rules_row(std::uint8_t* __restrict st, const std::uint8_t* __restrict own, const std::uint8_t* __restrict region,
                const std::uint8_t* __restrict ym, const std::uint8_t* __restrict yp, const std::uint8_t* __restrict zm,
                const std::uint8_t* __restrict zp, std::size_t n) {
   auto across = [&](std::size_t x) {  // occupied neighbour in y or z
     return (ym[x] == kOccupied) | (yp[x] == kOccupied) | (zm[x] == kOccupied) | (zp[x] == kOccupied);
   };
+  auto seed = [&](std::size_t x, bool touches) {
+    return static_cast<std::uint8_t>((own[x] == kUnknown) & (region[x] == 0) & touches & (st[x] == kUnknown));
+  };
   if (n == 1) {
     st[0] = rule(st[0], own[0], region[0], across(0));
-    return;
+    return seed(0, across(0));
   }
+  std::uint8_t any = 0;
   for (std::size_t x = 1; x + 1 < n; ++x) {
     const bool touches = (own[x - 1] == kOccupied) | (own[x + 1] == kOccupied) | across(x);
     st[x] = rule(st[x], own[x], region[x], touches);
+    any |= seed(x, touches);
   }
-  st[0] = rule(st[0], own[0], region[0], (own[1] == kOccupied) | across(0));
-  st[n - 1] = rule(st[n - 1], own[n - 1], region[n - 1], (own[n - 2] == kOccupied) | across(n - 1));
+  const bool t0 = (own[1] == kOccupied) | across(0), tn = (own[n - 2] == kOccupied) | across(n - 1);
+  st[0] = rule(st[0], own[0], region[0], t0);
+  st[n - 1] = rule(st[n - 1], own[n - 1], region[n - 1], tn);
+  return any | seed(0, t0) | seed(n - 1, tn);
 }
 
 }  // namespace
@@ -128,22 +139,13 @@ namespace {
 // Rule 3 carried through whole gaps: every gap voxel the texture calls free that is 6-connected,
 // through gap voxels, to a gap voxel touching an occupied voxel becomes unknown. The unobserved
 // inside of a thin structure (a table top seen only edge-on) is such a gap; without this it would
-// be labelled free everywhere but along its rim. The result is a set (connected components), so it
+// be labelled free everywhere but along its rim. `queue` holds the seeds (gap voxels left unknown
+// that touch an occupied voxel), in any order: the result is a set (connected components), so it
 // does not depend on visiting order.
 void flood_gaps_from_objects(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own,
-                             const std::vector<std::uint8_t>& region, const Dims& d) {
+                             const std::vector<std::uint8_t>& region, const Dims& d, std::vector<std::size_t>& queue) {
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, sz = nx * ny;
   auto gap = [&](std::size_t i) { return own[i] == kUnknown && !region[i]; };
-  std::vector<std::size_t> queue;
-  for (std::size_t z = 0, i = 0; z < nz; ++z)
-    for (std::size_t y = 0; y < ny; ++y)
-      for (std::size_t x = 0; x < nx; ++x, ++i) {
-        if (st[i] != kUnknown || !gap(i)) continue;
-        const bool touches = (x > 0 && own[i - 1] == kOccupied) || (x + 1 < nx && own[i + 1] == kOccupied) ||
-                             (y > 0 && own[i - nx] == kOccupied) || (y + 1 < ny && own[i + nx] == kOccupied) ||
-                             (z > 0 && own[i - sz] == kOccupied) || (z + 1 < nz && own[i + sz] == kOccupied);
-        if (touches) queue.push_back(i);
-      }
   while (!queue.empty()) {
     const std::size_t i = queue.back();
     queue.pop_back();
@@ -170,17 +172,33 @@ void apply_voxel_rules(std::vector<std::uint8_t>& st, const std::vector<std::uin
   const std::vector<std::uint8_t> region = unknown_regions(own, d, params);
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, sz = nx * ny;
   const std::vector<std::uint8_t> none(nx, kFree);  // outside the map: no occupied neighbour
-  // Reads only own states and each voxel's own entry of st, so rows are independent.
+  // Reads only own states and each voxel's own entry of st, so rows are independent. Rows that
+  // hold seeds of the gap flood are searched for them on the way, slab by slab.
+  std::vector<std::size_t> seeds;
+  std::mutex seeds_mutex;
   parallel_for(nz, params.threads, [&](std::size_t z0, std::size_t z1) {
+    std::vector<std::size_t> mine;
     for (std::size_t z = z0; z < z1; ++z)
       for (std::size_t y = 0; y < ny; ++y) {
         const std::size_t i = nx * (y + ny * z);
         const std::uint8_t* o = own.data() + i;
-        rules_row(st.data() + i, o, region.data() + i, y > 0 ? o - nx : none.data(), y + 1 < ny ? o + nx : none.data(),
-                  z > 0 ? o - sz : none.data(), z + 1 < nz ? o + sz : none.data(), nx);
+        if (!rules_row(st.data() + i, o, region.data() + i, y > 0 ? o - nx : none.data(),
+                       y + 1 < ny ? o + nx : none.data(), z > 0 ? o - sz : none.data(),
+                       z + 1 < nz ? o + sz : none.data(), nx))
+          continue;
+        for (std::size_t x = 0; x < nx; ++x) {
+          const std::size_t j = i + x;
+          if (st[j] != kUnknown || own[j] != kUnknown || region[j]) continue;
+          const bool touches = (x > 0 && own[j - 1] == kOccupied) || (x + 1 < nx && own[j + 1] == kOccupied) ||
+                               (y > 0 && own[j - nx] == kOccupied) || (y + 1 < ny && own[j + nx] == kOccupied) ||
+                               (z > 0 && own[j - sz] == kOccupied) || (z + 1 < nz && own[j + sz] == kOccupied);
+          if (touches) mine.push_back(j);
+        }
       }
+    std::lock_guard<std::mutex> lock(seeds_mutex);
+    seeds.insert(seeds.end(), mine.begin(), mine.end());
   });
-  flood_gaps_from_objects(st, own, region, d);
+  flood_gaps_from_objects(st, own, region, d, seeds);
 }
 
 std::vector<std::uint8_t> unknown_regions(const Grid& g, const Params& params) {
