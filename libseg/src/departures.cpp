@@ -78,9 +78,9 @@ inline std::uint8_t rule(std::uint8_t s, std::uint8_t o, std::uint8_t region, bo
   return o != kUnknown ? o : (region ? kUnknown : gap);
 }
 
-// Applies the rules to one row and returns whether it holds a seed of the gap flood (a gap voxel
-// the rules left unknown that touches an occupied voxel), so that only those rows are searched
-// for seeds. Branch-free, so the whole row vectorises.
+// Applies the rules to one row and returns false when it holds no seed of the gap flood (a gap
+// voxel the rules left unknown that touches an occupied voxel), so that only the other rows are
+// searched for seeds. Branch-free, so the whole row vectorises.
 __attribute__((target_clones("avx2", "default")))
 bool rules_row(std::uint8_t* __restrict st, const std::uint8_t* __restrict own, const std::uint8_t* __restrict region,
                const std::uint8_t* __restrict ym, const std::uint8_t* __restrict yp, const std::uint8_t* __restrict zm,
@@ -95,12 +95,15 @@ bool rules_row(std::uint8_t* __restrict st, const std::uint8_t* __restrict own, 
     st[0] = rule(st[0], own[0], region[0], across(0));
     return seed(0, across(0));
   }
-  std::uint8_t any = 0;
   for (std::size_t x = 1; x + 1 < n; ++x) {
     const bool touches = (own[x - 1] == kOccupied) | (own[x + 1] == kOccupied) | across(x);
     st[x] = rule(st[x], own[x], region[x], touches);
-    any |= seed(x, touches);
   }
+  // A second, cheap pass for the flag (GCC 12 does not vectorise the loop above with a reduction
+  // in it): a superset of the seeds, gap voxels left unknown; the caller checks the neighbours.
+  std::uint8_t any = 0;
+  for (std::size_t x = 1; x + 1 < n; ++x)
+    any |= static_cast<std::uint8_t>((own[x] == kUnknown) & (region[x] == 0) & (st[x] == kUnknown));
   const bool t0 = (own[1] == kOccupied) | across(0), tn = (own[n - 2] == kOccupied) | across(n - 1);
   st[0] = rule(st[0], own[0], region[0], t0);
   st[n - 1] = rule(st[n - 1], own[n - 1], region[n - 1], tn);
