@@ -9,6 +9,7 @@
 #include "occseg/create.hpp"
 #include "occseg/departures.hpp"
 #include "occseg/refine.hpp"
+#include "occseg/planes.hpp"
 #include "occseg/segment.hpp"
 #include "occseg/texture.hpp"
 #include "scenes.hpp"
@@ -124,6 +125,23 @@ void BM_Labelling(benchmark::State& state) {
   counters(state, in.grid.p.size());
 }
 
+// The default preset's support-plane split after labelling (one thread by design).
+void BM_SupportPlanes(benchmark::State& state) {
+  const Inputs& in = inputs(static_cast<int>(state.range(0)));
+  std::vector<std::uint32_t> labels0, labels;
+  std::vector<Segment> segments0, segments;
+  label_components(in.refined_default, in.grid, labels0, segments0, 2, true);
+  for (auto _ : state) {
+    state.PauseTiming();
+    labels = labels0;
+    segments = segments0;
+    state.ResumeTiming();
+    split_support_planes(in.grid, labels, segments, Params().support_plane, true);
+  }
+  state.counters["segments_added"] = static_cast<double>(segments.size() - segments0.size());
+  counters(state, in.grid.p.size());
+}
+
 void BM_SegmentPaper(benchmark::State& state) {
   const Inputs& in = inputs(static_cast<int>(state.range(0)));
   const Params p = params_for(state, Preset::paper);
@@ -167,6 +185,7 @@ BENCHMARK(BM_RefineUnknown)->Apply(stage_args);
 BENCHMARK(BM_RefineBoundaries)->Apply(stage_args);
 BENCHMARK(BM_VoxelRules)->Apply(stage_args);
 BENCHMARK(BM_Labelling)->Apply(stage_args);
+BENCHMARK(BM_SupportPlanes)->ArgNames({"noisy"})->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_SegmentPaper)->Apply(stage_args);
 BENCHMARK(BM_SegmentDefault)->Apply(stage_args);
 BENCHMARK(BM_SegmentDefaultSize)->ArgNames({"n", "nz"})->Args({160, 64})->Args({320, 128})->Args({512, 256})

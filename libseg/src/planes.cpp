@@ -110,18 +110,25 @@ bool refit(const std::vector<Vec>& pts, const Plane& pl, Plane& out) {
 
 }  // namespace
 
-bool fit_dominant_plane(const std::vector<Vec>& points, std::uint64_t seed, Plane& plane, std::size_t& inliers) {
-  inliers = 0;
-  if (points.size() < 3) return false;
-  // Hypotheses are scored on an evenly strided sample: a plane holding a fraction f of the points
-  // holds about f of the sample, and scoring costs no more for a floor of a million voxels.
-  constexpr std::size_t kSample = 4096;
-  std::vector<Vec> sample;
-  if (points.size() <= kSample) sample = points;
+namespace {
+
+// Hypotheses are scored on an evenly strided sample: a plane holding a fraction f of the points
+// holds about f of the sample, and scoring costs no more for a floor of a million voxels.
+constexpr std::size_t kSample = 4096;
+
+// Indices of the sample: all of n when n <= kSample, else kSample evenly strided.
+template <typename F>
+void for_sample(std::size_t n, F&& f) {
+  if (n <= kSample)
+    for (std::size_t i = 0; i < n; ++i) f(i);
   else
-    for (std::size_t i = 0; i < kSample; ++i) sample.push_back(points[i * points.size() / kSample]);
+    for (std::size_t i = 0; i < kSample; ++i) f(i * n / kSample);
+}
+
+// MSAC over the sample; false when every draw was degenerate.
+bool sample_plane(const std::vector<Vec>& sample, std::uint64_t seed, Plane& best) {
+  if (sample.size() < 3) return false;
   Rng rng{seed};
-  Plane best;
   double best_cost = std::numeric_limits<double>::infinity();
   // 256 draws of 3 points: a plane holding half the points is drawn with probability
   // 1 - (7/8)^256 > 1 - 1e-14.
@@ -138,10 +145,13 @@ bool fit_dominant_plane(const std::vector<Vec>& points, std::uint64_t seed, Plan
     const double score = cost(sample, h);
     if (score < best_cost) best_cost = score, best = h;
   }
-  if (!std::isfinite(best_cost)) return false;
-  best_cost = cost(points, best);
-  // Two least-squares refits: the best draw passes through three noisy voxels, the fit through
-  // all its inliers sits in the middle of a thick layer.
+  return std::isfinite(best_cost);
+}
+
+// Two least-squares refits over all points: the best draw passes through three noisy voxels, the
+// fit through all its inliers sits in the middle of a thick layer. Returns the inlier count.
+std::size_t refine_plane(const std::vector<Vec>& points, Plane& best) {
+  double best_cost = cost(points, best);
   for (int r = 0; r < 2; ++r) {
     Plane fit;
     if (!refit(points, best, fit)) break;
@@ -149,8 +159,17 @@ bool fit_dominant_plane(const std::vector<Vec>& points, std::uint64_t seed, Plan
     if (!(c < best_cost)) break;
     best = fit, best_cost = c;
   }
-  plane = best;
-  inliers = count_inliers(points, best);
+  return count_inliers(points, best);
+}
+
+}  // namespace
+
+bool fit_dominant_plane(const std::vector<Vec>& points, std::uint64_t seed, Plane& plane, std::size_t& inliers) {
+  inliers = 0;
+  std::vector<Vec> sample;
+  for_sample(points.size(), [&](std::size_t i) { sample.push_back(points[i]); });
+  if (!sample_plane(sample, seed, plane)) return false;
+  inliers = refine_plane(points, plane);
   return true;
 }
 
@@ -162,18 +181,27 @@ class Splitter {
   Splitter(const Grid& g, std::vector<std::uint32_t>& labels, std::vector<Segment>& segments, bool occupied26)
       : g_(g), d_(g.dims), labels_(labels), segs_(segments), conn26_(occupied26) {}
 
-  void run(std::uint32_t s, std::size_t min_plane) {
-    const Segment seg = segs_[s];
-    if (seg.state != State::occupied || seg.voxels < min_plane + kMinObjectVoxels) return;
-    // Temporary labels count down from the top of the id range; they must stay above every id.
-    if (segs_.size() + 2 * seg.voxels + 2 >= std::numeric_limits<std::uint32_t>::max()) return;
-    collect(s);
+  // Examines segment `s`. Its voxels are [first, last) in scan order when the caller bucketed
+  // them, else (first = nullptr) they are found by scanning its box.
+  void run(std::uint32_t s, std::size_t min_plane, const std::uint32_t* first, const std::uint32_t* last) {
+    // fit_dominant_plane() in two steps: a segment whose sample shows no plane near half of it
+    // (a sprawling noisy region) is rejected before its voxels are even listed.
+    const std::size_t n = first ? static_cast<std::size_t>(last - first) : segs_[s].voxels;
+    std::vector<std::size_t> ranks;
+    for_sample(n, [&](std::size_t i) { ranks.push_back(i); });
+    pts_.clear();
+    std::uint32_t first_voxel = 0;
+    collect_sample(s, first, ranks, first_voxel);
     Plane pl;
-    std::size_t inliers = 0;
-    if (!fit_dominant_plane(pts_, 0x6F6363736567ull ^ (std::uint64_t(members_[0]) * 0x9E3779B97F4A7C15ull), pl,
-                            inliers) ||
-        inliers < min_plane || 2 * inliers < members_.size())
+    if (!sample_plane(pts_, 0x6F6363736567ull ^ (std::uint64_t(first_voxel) * 0x9E3779B97F4A7C15ull), pl) ||
+        10 * count_inliers(pts_, pl) < 4 * pts_.size())  // under 40 %: far from half
       return;
+    members_.clear();
+    for_members(s, first, last, [&](std::uint32_t v, std::size_t) { members_.push_back(v); });
+    pts_.resize(n);
+    for (std::size_t m = 0; m < n; ++m) pts_[m] = coords(members_[m]);
+    const std::size_t inliers = refine_plane(pts_, pl);
+    if (inliers < min_plane || 2 * inliers < n) return;
     const int open = open_side(s, pl);
     if (open == 0) return;
     plane_ = pl;
@@ -212,18 +240,52 @@ class Splitter {
     return std::fabs(plane_.distance(c[0], c[1], c[2])) <= kPlaneInlierDistance;
   }
 
-  void collect(std::uint32_t s) {
+  // The coordinates of the voxels of s with the given ranks (ascending) in scan order, into pts_.
+  // Without a bucket, rows are counted with a vectorised compare and only the few rows that hold
+  // a sampled rank are walked voxel by voxel (a branch per voxel cost 40 ms on a noisy map).
+  void collect_sample(std::uint32_t s, const std::uint32_t* first, const std::vector<std::size_t>& ranks,
+                      std::uint32_t& first_voxel) {
+    if (first) {
+      first_voxel = first[0];
+      for (std::size_t r : ranks) pts_.push_back(coords(first[r]));
+      return;
+    }
     const Segment& seg = segs_[s];
-    members_.clear();
-    pts_.clear();
-    for (std::size_t z = seg.bbox_min[2]; z <= seg.bbox_max[2]; ++z)
-      for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1]; ++y)
-        for (std::size_t x = seg.bbox_min[0]; x <= seg.bbox_max[0]; ++x) {
-          const std::size_t i = g_.index(x, y, z);
-          if (labels_[i] != s) continue;
-          members_.push_back(static_cast<std::uint32_t>(i));
-          pts_.push_back({double(x), double(y), double(z)});
+    const std::size_t x0 = seg.bbox_min[0], x1 = seg.bbox_max[0] + 1;
+    std::size_t rank = 0, next = 0;
+    for (std::size_t z = seg.bbox_min[2]; z <= seg.bbox_max[2] && next < ranks.size(); ++z)
+      for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1] && next < ranks.size(); ++y) {
+        const std::uint32_t* row = labels_.data() + g_.index(0, y, z);
+        std::size_t c = 0;
+        for (std::size_t x = x0; x < x1; ++x) c += row[x] == s;
+        if (rank + c <= ranks[next]) {
+          rank += c;
+          continue;
         }
+        for (std::size_t x = x0; x < x1; ++x) {
+          if (row[x] != s) continue;
+          if (rank == 0) first_voxel = static_cast<std::uint32_t>(g_.index(x, y, z));
+          if (next < ranks.size() && ranks[next] == rank) pts_.push_back(coords(g_.index(x, y, z))), ++next;
+          ++rank;
+        }
+      }
+  }
+
+  // Calls f(voxel, rank) for the voxels of s in scan order.
+  template <typename F>
+  void for_members(std::uint32_t s, const std::uint32_t* first, const std::uint32_t* last, F&& f) const {
+    std::size_t rank = 0;
+    if (first) {
+      for (const std::uint32_t* v = first; v != last; ++v) f(*v, rank++);
+      return;
+    }
+    const Segment& seg = segs_[s];
+    for (std::size_t z = seg.bbox_min[2]; z <= seg.bbox_max[2]; ++z)
+      for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1]; ++y) {
+        const std::size_t row = g_.index(0, y, z);
+        for (std::size_t x = seg.bbox_min[0]; x <= seg.bbox_max[0]; ++x)
+          if (labels_[row + x] == s) f(static_cast<std::uint32_t>(row + x), rank++);
+      }
   }
 
   // +1 or -1: the side of the plane (along n) on which its voxels see free space, counted one to
@@ -411,9 +473,43 @@ class Splitter {
 void split_support_planes(const Grid& grid, std::vector<std::uint32_t>& labels, std::vector<Segment>& segments,
                           std::size_t min_plane, bool occupied26) {
   if (min_plane == 0) return;
-  Splitter splitter(grid, labels, segments, occupied26);
+  // Candidates: occupied segments big enough for a plane and an object. Their voxels are found by
+  // scanning each one's box, or, when the boxes add up to more than the map (sprawling segments
+  // of a noisy map), bucketed in one pass over the labels. Buckets stay valid: a split only
+  // relabels the voxels of the segment being split.
   const std::size_t original = segments.size();
-  for (std::size_t s = 0; s < original; ++s) splitter.run(static_cast<std::uint32_t>(s), min_plane);
+  std::vector<std::uint32_t> candidates;
+  std::size_t boxes = 0, voxels = 0;
+  for (std::size_t s = 0; s < original; ++s) {
+    const Segment& seg = segments[s];
+    if (seg.state != State::occupied || seg.voxels < min_plane + kMinObjectVoxels) continue;
+    // Temporary labels count down from the top of the id range; they must stay above every id.
+    if (original + 2 * seg.voxels + 2 >= std::numeric_limits<std::uint32_t>::max()) continue;
+    candidates.push_back(static_cast<std::uint32_t>(s));
+    std::size_t box = 1;
+    for (int k = 0; k < 3; ++k) box *= std::size_t(seg.bbox_max[k] - seg.bbox_min[k]) + 1;
+    boxes += box;
+    voxels += seg.voxels;
+  }
+  Splitter splitter(grid, labels, segments, occupied26);
+  if (boxes <= labels.size()) {
+    for (std::uint32_t s : candidates) splitter.run(s, min_plane, nullptr, nullptr);
+    return;
+  }
+  std::vector<std::uint32_t> slot(original, ~0u);
+  std::vector<std::size_t> start{0};
+  for (std::uint32_t s : candidates) {
+    slot[s] = static_cast<std::uint32_t>(start.size() - 1);
+    start.push_back(start.back() + segments[s].voxels);
+  }
+  std::vector<std::uint32_t> members(voxels);
+  std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    const std::uint32_t k = slot[labels[i]];
+    if (k != ~0u) members[fill[k]++] = static_cast<std::uint32_t>(i);
+  }
+  for (std::uint32_t s : candidates)
+    splitter.run(s, min_plane, members.data() + start[slot[s]], members.data() + start[slot[s] + 1]);
 }
 
 }  // namespace occseg

@@ -115,6 +115,31 @@ TEST(Planes, BoxStandingOnAFloorBecomesItsOwnSegment) {
   EXPECT_EQ(s.segments[s.at(0, 0, 0)].voxels, 1800u);
 }
 
+TEST(Planes, SprawlingSegmentsTakeTheOnePassPathWithTheSameResult) {
+  // A one-voxel frame along the 12 edges of the map (a segment whose box is the whole map) next
+  // to the floor and box: the candidates' boxes add up to more than the map, so their voxels are
+  // bucketed in one pass over the labels instead of scanning each box.
+  const auto edge = [](int x, int y, int z) {
+    const int ends = (x == 0 || x == 29) + (y == 0 || y == 29) + (z == 0 || z == 11);
+    return ends >= 2;
+  };
+  Scene s(Dims{30, 30, 12}, [&](int x, int y, int z) {
+    if (edge(x, y, z)) return 2;
+    if (x < 2 || x > 27 || y < 2 || y > 27) return 0;  // free around the floor
+    return floor_with_box(x, y, z);
+  });
+  s.label_and_split(200);  // the frame's 272 voxels make it a candidate too
+  ASSERT_EQ(s.segments.size(), s.before + 1);
+  const std::uint32_t frame = s.at(0, 0, 0), floor_id = s.at(2, 2, 2), box_id = s.at(10, 12, 3);
+  EXPECT_EQ(box_id, s.before);
+  EXPECT_NE(floor_id, box_id);
+  EXPECT_EQ(s.segments[frame].voxels, 4u * 30 + 4u * 28 + 4u * 10);
+  EXPECT_EQ(s.segments[floor_id].voxels, 26u * 26);
+  EXPECT_EQ(s.segments[box_id].voxels, 80u);
+  EXPECT_EQ(s.ids([](int x, int y, int z) { return z > 2 && in_box(x, y, z, 10, 12, 3, 13, 15, 7); }),
+            std::set<std::uint32_t>{box_id});
+}
+
 TEST(Planes, OffSmallPlanesAndSmallBumpsDoNotSplit) {
   {
     Scene s(Dims{30, 30, 12}, floor_with_box);
