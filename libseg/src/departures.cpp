@@ -31,7 +31,7 @@ void box_pass(const std::uint8_t* in, std::uint8_t* out, const Dims& d, int axis
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz;
   const std::size_t R = static_cast<std::size_t>(r);
   if (axis == 0) {
-    parallel_for(ny * nz, threads, [&](std::size_t r0, std::size_t r1) {
+    parallel_for_dynamic(ny * nz, threads, [&](std::size_t r0, std::size_t r1) {
       for (std::size_t row = r0; row < r1; ++row) {
         const std::uint8_t* a = in + row * nx;
         std::uint8_t* o = out + row * nx;
@@ -48,7 +48,7 @@ void box_pass(const std::uint8_t* in, std::uint8_t* out, const Dims& d, int axis
   const std::size_t len = axis == 1 ? ny : nz, planes = axis == 1 ? nz : ny;
   const std::size_t row = axis == 1 ? nx : nx * ny;  // distance between rows along the axis
   const std::size_t plane = axis == 1 ? nx * ny : nx;
-  parallel_for(planes, threads, [&](std::size_t p0, std::size_t p1) {
+  parallel_for_dynamic(planes, threads, [&](std::size_t p0, std::size_t p1) {
     for (std::size_t pl = p0; pl < p1; ++pl)
       for (std::size_t k = 0; k < len; ++k) {
         const std::size_t base = pl * plane;
@@ -179,7 +179,7 @@ void apply_voxel_rules(std::vector<std::uint8_t>& st, const std::vector<std::uin
   // hold seeds of the gap flood are searched for them on the way, slab by slab.
   std::vector<std::size_t> seeds;
   std::mutex seeds_mutex;
-  parallel_for(nz, params.threads, [&](std::size_t z0, std::size_t z1) {
+  parallel_for_dynamic(nz, params.threads, [&](std::size_t z0, std::size_t z1) {
     std::vector<std::size_t> mine;
     for (std::size_t z = z0; z < z1; ++z)
       for (std::size_t y = 0; y < ny; ++y) {

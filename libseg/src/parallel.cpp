@@ -2,6 +2,8 @@
 
 #include "parallel_pool.hpp"
 
+#include <algorithm>
+#include <atomic>
 #include <exception>
 #include <mutex>
 #include <system_error>
@@ -59,6 +61,17 @@ void parallel_for(std::size_t n, int threads, const std::function<void(std::size
   for (std::size_t k = started; k < t; ++k) run(n * k / t, n * (k + 1) / t);
   for (auto& th : pool) th.join();
   if (first) std::rethrow_exception(first);
+}
+
+void parallel_for_dynamic(std::size_t n, int threads, const std::function<void(std::size_t, std::size_t)>& fn) {
+  if (n == 0) return;
+  const std::size_t t = std::min(n, static_cast<std::size_t>(resolve_threads(threads)));
+  const std::size_t pieces = std::min(n, 8 * t);
+  std::atomic<std::size_t> next{0};
+  parallel_for(t, threads, [&](std::size_t, std::size_t) {
+    for (std::size_t k; (k = next.fetch_add(1, std::memory_order_relaxed)) < pieces;)
+      fn(n * k / pieces, n * (k + 1) / pieces);
+  });
 }
 
 }  // namespace occseg

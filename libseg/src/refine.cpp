@@ -238,7 +238,7 @@ void boundary_plane(std::uint8_t* st, const std::uint8_t* own, std::size_t nx, P
 template <class RowFn, class PlaneFn>
 void scan_axis(const Dims& d, int axis, int threads, RowFn&& row_fn, PlaneFn&& plane_fn) {
   if (axis == 0) {
-    parallel_for(d.ny * d.nz, threads, [&](std::size_t r0, std::size_t r1) {
+    parallel_for_dynamic(d.ny * d.nz, threads, [&](std::size_t r0, std::size_t r1) {
       for (std::size_t r = r0; r < r1; ++r) {
         row_fn(r * d.nx, d.nx, +1);
         row_fn(r * d.nx, d.nx, -1);
@@ -247,7 +247,7 @@ void scan_axis(const Dims& d, int axis, int threads, RowFn&& row_fn, PlaneFn&& p
     return;
   }
   const Plane pl = plane_shape(d, axis);
-  parallel_for(plane_count(d, axis), threads, [&](std::size_t o0, std::size_t o1) {
+  parallel_for_dynamic(plane_count(d, axis), threads, [&](std::size_t o0, std::size_t o1) {
     std::vector<std::uint8_t> lane(d.nx);
     for (std::size_t o = o0; o < o1; ++o) {
       plane_fn(plane_base(d, axis, o), pl, lane.data(), +1);

@@ -17,5 +17,8 @@ LD_LIBRARY_PATH="$prefix/$libdir" "$work/example" > "$work/output.txt"
 cat "$work/output.txt"
 grep -q "^segment 1: occupied, 512 voxels, mop 0.90, bbox (12, 12, 12)-(19, 19, 19)$" "$work/output.txt"
 # The binary really uses the installed library.
-LD_LIBRARY_PATH="$prefix/$libdir" ldd "$work/example" | grep -q "liboccseg.so.0 => $prefix/$libdir/liboccseg.so.0"
+# (Captured first: with pipefail, `ldd | grep -q` fails when grep exits before ldd has written
+# everything and ldd dies of SIGPIPE, which made this test flaky.)
+deps=$(LD_LIBRARY_PATH="$prefix/$libdir" ldd "$work/example")
+grep -q "liboccseg.so.0 => $prefix/$libdir/liboccseg.so.0" <<<"$deps"
 echo "pkg-config build: ok"
