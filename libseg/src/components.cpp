@@ -6,6 +6,7 @@
 
 #include "occseg/error.hpp"
 #include "occseg/parallel.hpp"
+#include "huge_pages.hpp"
 
 #ifdef __SSE2__
 #include <emmintrin.h>
@@ -116,7 +117,7 @@ void label_components(const std::vector<std::uint8_t>& st, const Grid& g, std::v
                                          " voxels exceed the uint32 labels (at most 2^32 - 2 voxels)");
   const std::size_t nx = g.dims.nx, ny = g.dims.ny, nz = g.dims.nz, sz = nx * ny;
   const std::size_t slabs = (nz + kLabelSlab - 1) / kLabelSlab;
-  labels.resize(n);
+  resize_huge(labels, n);
   std::uint32_t* lab = labels.data();
   const std::uint8_t* s = st.data();
   const float* p = g.p.data();

@@ -1,6 +1,7 @@
 #include "occseg/create.hpp"
 
 #include "occseg/parallel.hpp"
+#include "huge_pages.hpp"
 
 namespace occseg {
 
@@ -16,7 +17,8 @@ double mean_occupancy(const Grid& grid, const Block& b) {
 
 std::vector<std::uint8_t> create_segments(const Grid& grid, const std::vector<Block>& blocks,
                                           const Params& params) {
-  std::vector<std::uint8_t> states(grid.dims.count());
+  std::vector<std::uint8_t> states;
+  resize_huge(states, grid.dims.count());
   parallel_for_dynamic(blocks.size(), params.threads, [&](std::size_t b, std::size_t e) {
     for (std::size_t i = b; i < e; ++i) {  // blocks are disjoint: no two threads write one voxel
       const Block& blk = blocks[i];

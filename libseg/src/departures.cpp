@@ -4,6 +4,7 @@
 #include <mutex>
 
 #include "occseg/parallel.hpp"
+#include "huge_pages.hpp"
 #include "occseg/refine.hpp"
 
 namespace occseg {
@@ -113,7 +114,8 @@ bool rules_row(std::uint8_t* __restrict st, const std::uint8_t* __restrict own, 
 }  // namespace
 
 std::vector<std::uint8_t> unknown_regions(const std::vector<std::uint8_t>& own, const Dims& d, const Params& params) {
-  std::vector<std::uint8_t> m(own.size());
+  std::vector<std::uint8_t> m;
+  resize_huge(m, own.size());
   const std::size_t chunk = 1 << 16;
   parallel_for((m.size() + chunk - 1) / chunk, params.threads, [&](std::size_t c0, std::size_t c1) {
     const std::size_t b = c0 * chunk, e = std::min(m.size(), c1 * chunk);
@@ -122,7 +124,8 @@ std::vector<std::uint8_t> unknown_regions(const std::vector<std::uint8_t>& own, 
   const int r = params.gap_radius;
   if (r <= 0) return m;
   // Opening = erosion then dilation, each separable into three axis passes (ping-pong buffers).
-  std::vector<std::uint8_t> t(m.size());
+  std::vector<std::uint8_t> t;
+  resize_huge(t, m.size());
   std::uint8_t* a = m.data();
   std::uint8_t* b = t.data();
   for (int pass = 0; pass < 6; ++pass) {

@@ -11,6 +11,7 @@
 
 #include "occseg/error.hpp"
 #include "occseg/parallel.hpp"
+#include "huge_pages.hpp"
 
 namespace occseg {
 
@@ -62,8 +63,8 @@ OccupancyFusion::OccupancyFusion(const GridFrame& frame, const SensorModel& mode
   l_miss_ = static_cast<float>(logit(model.p_miss));
   l_min_ = static_cast<float>(logit(model.clamp_min));
   l_max_ = static_cast<float>(logit(model.clamp_max));
-  log_odds_.assign(frame.dims.count(), 0.0f);
-  marks_.assign(frame.dims.count(), 0);
+  resize_huge(log_odds_, frame.dims.count());  // zero-filled, on 2 MB pages where possible
+  resize_huge(marks_, frame.dims.count());
 }
 
 namespace {

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "occseg/parallel.hpp"
+#include "huge_pages.hpp"
 
 #ifdef __SSE2__
 #include <emmintrin.h>
@@ -259,7 +260,8 @@ void scan_axis(const Dims& d, int axis, int threads, RowFn&& row_fn, PlaneFn&& p
 }  // namespace
 
 std::vector<std::uint8_t> own_states(const Grid& g, const Params& params) {
-  std::vector<std::uint8_t> own(g.p.size());
+  std::vector<std::uint8_t> own;
+  resize_huge(own, g.p.size());
   float lo, hi;
   float_bounds(params.free_below, params.occupied_above, lo, hi);
   const std::size_t chunk = 1 << 16;

@@ -4,6 +4,7 @@
 
 #include "occseg/error.hpp"
 #include "occseg/parallel.hpp"
+#include "huge_pages.hpp"
 
 namespace occseg {
 
@@ -210,7 +211,7 @@ TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads) {
   const Stencil sten = stencil(d);
   TextureMap tm;
   tm.bins = contrast_bins;
-  tm.codes.resize(d.count());
+  resize_huge(tm.codes, d.count());
   std::uint16_t* codes = tm.codes.data();
   const float* p = grid.p.data();
   // Pass 1: fine contrast step + 1 of every interior voxel, parked in the code array, and the

@@ -1,0 +1,27 @@
+// Per-voxel buffers on 2 MB pages (internal). A 320 x 320 x 128 map's label array is 52 MB:
+// 12,800 page faults of 4 KB, or 26 of 2 MB; the faults were a quarter of the labelling stage.
+#pragma once
+#include <cstddef>
+#include <vector>
+
+namespace occseg {
+
+// Asks the kernel to back [p, p + bytes) with 2 MB pages where it can (Linux transparent huge
+// pages in "madvise" mode, the Debian default). Only the whole 2 MB pages inside the range are
+// advised. A hint: does nothing elsewhere or when refused. Call before the first touch.
+void advise_huge_pages(void* p, std::size_t bytes);
+
+// v.resize(n), with fresh storage advised before the new elements are written.
+template <class T>
+void resize_huge(std::vector<T>& v, std::size_t n) {
+  if (v.capacity() < n) {
+    std::vector<T> fresh;
+    fresh.reserve(n);
+    advise_huge_pages(fresh.data(), n * sizeof(T));
+    fresh.assign(v.begin(), v.end());
+    v.swap(fresh);
+  }
+  v.resize(n);
+}
+
+}  // namespace occseg
