@@ -103,7 +103,8 @@ helptext = run("segment", "--help").stdout
 params = re.findall(r"^  (\w+) \((int|double|string), default (\S+?)(?:, ([-\d.e+]+)\.\.([-\d.e+]+))?[,)]", helptext, re.M)
 names = [p[0] for p in params]
 for expected in ("smax", "smin", "split_ratio", "contrast_bins", "free_below", "occupied_above", "lookahead",
-                 "refine_passes", "gap_radius", "threads", "texture", "similarity", "preset"):
+                 "refine_passes", "gap_radius", "occupied_connectivity", "support_plane", "threads", "texture",
+                 "similarity", "preset"):
     assert expected in names, (expected, names)
 small = m[:16, :16, :16].copy()
 np.save(os.path.join(work, "small.npy"), small)
