@@ -402,10 +402,22 @@ class Splitter {
     std::vector<std::pair<std::uint32_t, std::uint32_t>> parts;  // (first voxel, temporary label)
     for (std::size_t k : split) parts.push_back({pieces_[k].first, temp(k)});
     std::size_t next = pieces_.size();
+    // Kept components after the first that are smaller than an object (a few voxels cut off by a
+    // split piece) join a split piece they touch instead of becoming segments of their own.
+    std::vector<std::size_t> join(pieces_.size(), 0);  // for kept components: piece index + 1
     for (std::uint32_t v : members_) {
       if (labels_[v] != kKeep) continue;
-      parts.push_back({v, temp(next)});
-      flood(v, kKeep, temp(next), [](std::size_t) { return true; }, [](std::uint32_t) {});
+      std::vector<std::uint32_t> voxels;
+      flood(v, kKeep, temp(next), [](std::size_t) { return true; }, [&](std::uint32_t w) { voxels.push_back(w); });
+      std::size_t into = 0;
+      if (next > pieces_.size() && voxels.size() < kMinObjectVoxels)
+        for (std::size_t i = 0; i < voxels.size() && !into; ++i)
+          for_neighbours(voxels[i], [&](std::size_t w) {
+            const std::uint32_t l = labels_[w];
+            if (!into && l > kKeep - 1 - pieces_.size() && l < kKeep && is_split[kKeep - 1 - l]) into = kKeep - l;
+          });
+      join.push_back(into);
+      if (!into) parts.push_back({v, temp(next)});
       ++next;
     }
     std::sort(parts.begin(), parts.end());
@@ -421,6 +433,8 @@ class Splitter {
       fresh.state = State::occupied;
       segs_.push_back(fresh);
     }
+    for (std::size_t k = pieces_.size(); k < next; ++k)
+      if (join[k]) final_id[k] = final_id[join[k] - 1];
     for (std::uint32_t v : members_) labels_[v] = final_id[kKeep - 1 - labels_[v]];
     recompute_statistics(s);
   }

@@ -140,6 +140,24 @@ TEST(Planes, SprawlingSegmentsTakeTheOnePassPathWithTheSameResult) {
             std::set<std::uint32_t>{box_id});
 }
 
+TEST(Planes, FragmentsCutOffByAnObjectJoinIt) {
+  // The floor (z = 2) ends at x = 19; a box overhangs its edge (x 18..23), and under the overhang
+  // two voxels at floor height touch only the box. Without the box they would be a segment of 2.
+  Scene s(Dims{30, 30, 12}, [](int x, int y, int z) {
+    if (z == 2 && x <= 19) return 2;
+    if (z == 2 && x >= 22 && x <= 23 && y == 13) return 2;
+    if (z < 2) return 1;
+    return in_box(x, y, z, 18, 12, 3, 23, 15, 7) ? 2 : 0;
+  });
+  s.label_and_split(256);
+  ASSERT_EQ(s.segments.size(), s.before + 1) << "the fragment is no segment of its own";
+  const std::uint32_t box_id = s.at(20, 12, 5);
+  EXPECT_EQ(s.at(22, 13, 2), box_id);
+  EXPECT_EQ(s.at(23, 13, 2), box_id);
+  EXPECT_NE(s.at(0, 0, 2), box_id);
+  EXPECT_EQ(s.segments[box_id].voxels, 6u * 4 * 5 + 2);
+}
+
 TEST(Planes, OffSmallPlanesAndSmallBumpsDoNotSplit) {
   {
     Scene s(Dims{30, 30, 12}, floor_with_box);
