@@ -8,6 +8,7 @@
 #include <string>
 #include <type_traits>
 
+#include "occseg/context.hpp"
 #include "occseg/error.hpp"
 #include "occseg/grid.hpp"
 #include "occseg/occseg.h"
@@ -22,6 +23,11 @@ struct occseg_params {
 
 struct occseg_map {
   occseg::Grid grid;
+};
+
+struct occseg_context {
+  explicit occseg_context(int threads) : context(threads) {}
+  occseg::Context context;
 };
 
 struct occseg_result {

@@ -19,25 +19,37 @@ void check_capacity(const occseg_result* r, std::size_t count) {
                                           std::to_string(n) + " voxels of the result");
 }
 
+// The body of occseg_segment and occseg_context_segment (context: NULL for none).
+void run_segment(occseg_result** out, occseg::Context* context, const occseg_map* map, const occseg_params* params) {
+  require(out, "out");
+  *out = nullptr;
+  require(map, "map");
+  occseg::Params p = params ? params->params : occseg::Params::defaults();
+  if (params && params->progress) {
+    const occseg_progress_fn fn = params->progress;
+    void* const user = params->progress_user;
+    p.progress = [fn, user](const char* stage, double fraction) { return fn(stage, fraction, user) == 0; };
+  }
+  auto r = std::make_unique<occseg_result>();
+  r->result = context ? occseg::segment(*context, map->grid, p) : occseg::segment(map->grid, p);
+  r->preset = occseg::preset_name(p.preset);
+  *out = r.release();
+}
+
 }  // namespace
 
 extern "C" {
 
 int occseg_segment(occseg_result** out, const occseg_map* map, const occseg_params* params) {
-  return guard("occseg_segment", [&] {
-    require(out, "out");
-    *out = nullptr;
-    require(map, "map");
-    occseg::Params p = params ? params->params : occseg::Params::defaults();
-    if (params && params->progress) {
-      const occseg_progress_fn fn = params->progress;
-      void* const user = params->progress_user;
-      p.progress = [fn, user](const char* stage, double fraction) { return fn(stage, fraction, user) == 0; };
-    }
-    auto r = std::make_unique<occseg_result>();
-    r->result = occseg::segment(map->grid, p);
-    r->preset = occseg::preset_name(p.preset);
-    *out = r.release();
+  return guard("occseg_segment", [&] { run_segment(out, nullptr, map, params); });
+}
+
+int occseg_context_segment(occseg_result** out, occseg_context* context, const occseg_map* map,
+                           const occseg_params* params) {
+  return guard("occseg_context_segment", [&] {
+    if (out) *out = nullptr;
+    require(context, "context");
+    run_segment(out, &context->context, map, params);
   });
 }
 

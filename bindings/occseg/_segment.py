@@ -1,6 +1,7 @@
 """occseg.segment(): one call from a NumPy array (or a Map) to a Result."""
 import ctypes
 
+from ._context import Context
 from ._errors import OccsegError, Status, check
 from ._handles import own
 from ._lib import PROGRESS_FN, lib
@@ -43,7 +44,7 @@ class _Progress:
 
 
 def segment(probabilities, preset="default", threads=0, *, voxel_size=None, origin=None, progress=None,
-            clamp=False, nan_unknown=False, **params):
+            clamp=False, nan_unknown=False, context=None, **params):
     """Segments a probabilistic occupancy map into free, unknown and occupied segments.
 
     probabilities: NumPy array indexed [z, y, x] (or [y, x]) of float32, float64, uint8 or uint16
@@ -54,6 +55,8 @@ def segment(probabilities, preset="default", threads=0, *, voxel_size=None, orig
     progress: optional callable(stage: str, fraction: float); a true return value cancels
         (OccsegError ECANCELLED), and an exception it raises cancels and is re-raised here.
     clamp, nan_unknown: accept out-of-range or NaN float values (see Map.from_array).
+    context: an occseg.Context whose threads run the stages (at most `threads` of them, 0: all);
+        same result, without starting threads on every call.
     **params: any parameter of occseg.param_table(), e.g. smax=32, split_ratio=1.2.
 
     Returns a Result. Raises OccsegError for bad input, naming the problem."""
@@ -79,7 +82,13 @@ def segment(probabilities, preset="default", threads=0, *, voxel_size=None, orig
         cb = _Progress(progress)
         check(lib.occseg_params_set_progress(p.handle, cb.c_fn, None))
         out = ctypes.c_void_p()
-        rc = lib.occseg_segment(ctypes.byref(out), m.handle, p.handle)
+        if context is None:
+            rc = lib.occseg_segment(ctypes.byref(out), m.handle, p.handle)
+        else:
+            if not isinstance(context, Context):
+                raise OccsegError(Status.EINVAL, "occseg.segment: context must be an occseg.Context, not "
+                                                 f"{type(context).__name__}")
+            rc = lib.occseg_context_segment(ctypes.byref(out), context.handle, m.handle, p.handle)
         if cb.error is not None:
             lib.occseg_result_free(out)  # NULL after a cancel; freed anyway should it ever not be
             raise cb.error

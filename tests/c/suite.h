@@ -30,5 +30,6 @@ int run_map_tests(void);
 int run_strides_tests(void);
 int run_segment_tests(void);
 int run_result_tests(void);
+int run_context_tests(void);
 
 #endif

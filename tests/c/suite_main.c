@@ -46,6 +46,7 @@ int main(void) {
   failed += run_strides_tests();
   failed += run_segment_tests();
   failed += run_result_tests();
+  failed += run_context_tests();
   printf("occseg C suite: %d failed\n", failed);
   return failed == 0 ? 0 : 1;
 }

@@ -249,11 +249,38 @@ typedef enum { OCCSEG_FREE = 0, OCCSEG_UNKNOWN = 1, OCCSEG_OCCUPIED = 2 } occseg
  * callback cancels, OCCSEG_ENOMEM when memory runs out. */
 OCCSEG_API int occseg_segment(occseg_result **out, const occseg_map *map, const occseg_params *params);
 
+/* A caller-owned context: a small pool of worker threads kept between calls. occseg_segment()
+ * starts and joins threads inside every parallel stage (about 30 times per call); a program that
+ * segments maps again and again (a robot re-segmenting its map at a few hertz) runs them on a
+ * context instead. There is no global state: contexts are independent of each other. */
+typedef struct occseg_context occseg_context;
+
+/* Starts a context with `threads` threads in all (the calling thread included; 0: one per
+ * core). Fails with OCCSEG_EINVAL for a count outside [0, 1024]. If the system refuses a
+ * thread, the pool is simply smaller. */
+OCCSEG_API int occseg_context_new(occseg_context **out, int threads);
+
+/* Stops the context's threads and frees it. NULL is a no-op. Must not be called while another
+ * thread is inside occseg_context_segment() with the same context. */
+OCCSEG_API void occseg_context_free(occseg_context *context);
+
+/* Threads the context runs a call on (the calling thread included); 0 for NULL. */
+OCCSEG_API int occseg_context_threads(const occseg_context *context);
+
+/* occseg_segment() with its parallel stages on the context's threads, at most the parameter
+ * "threads" of them (0: all). The result is identical to occseg_segment()'s. One call at a time
+ * per context: calls from several threads on one context wait for each other. The progress
+ * callback is called on the calling thread. */
+OCCSEG_API int occseg_context_segment(occseg_result **out, occseg_context *context, const occseg_map *map,
+                                      const occseg_params *params);
+
 /* ========================================================================================== */
 /*  Results                                                                                   */
 /* ========================================================================================== */
 
-/* One segment: a 6-connected region of voxels of one state. */
+/* One segment: a connected region of voxels of one state (6-connected; occupied voxels
+ * 26-connected in the default preset, whose support-plane rule may also split an occupied region
+ * into the plane and the objects standing on it; docs/algorithm.md). */
 typedef struct {
   uint32_t struct_size;   /* set by the caller to sizeof(occseg_segment_info) */
   uint32_t id;            /* equals its index in the table and its label in the label array */
