@@ -1,6 +1,8 @@
 #include "occseg/texture.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <immintrin.h>
 
 #include "occseg/error.hpp"
 #include "occseg/parallel.hpp"
@@ -140,6 +142,60 @@ void lbp_row_3d(const float* p, const std::ptrdiff_t* off, std::size_t n, std::u
   lbp_row_impl<63>(p, off, n, out);
 }
 
+#if defined(__x86_64__) && defined(__GNUC__)
+#define OCCSEG_TEXTURE_AVX2 1
+// contrast_row_impl<63>, 8 voxels per step in hand-written AVX2: the same IEEE operations in the
+// same order (masked adds in neighbour order, the two divisions, the +-1e-6 interval, truncating
+// conversions), so the same steps; GCC's own vectorisation of the loop above took about 36
+// instructions per voxel. No FMA: a fused multiply-add would round differently.
+__attribute__((target("avx2"))) void contrast_row_avx2(const float* p, const std::ptrdiff_t* off, std::size_t n,
+                                                       std::uint16_t* out) {
+  const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), err = _mm256_set1_ps(1e-6f);
+  const __m256 fine = _mm256_set1_ps(static_cast<float>(ContrastQuantizer::kFine));
+  const __m256i top = _mm256_set1_epi32(ContrastQuantizer::kFine - 1), recheck = _mm256_set1_epi32(kRecheck);
+  const __m256i inc = _mm256_set1_epi32(1);
+  std::size_t x = 0;
+  for (; x + 8 <= n; x += 8) {
+    const __m256 c = _mm256_loadu_ps(p + x);
+    __m256 s1 = zero, s0 = zero, n1 = zero, n0 = zero;
+    for (int k = 0; k < 6; ++k) {
+      const __m256 v = _mm256_loadu_ps(p + x + off[k]);
+      const __m256 up = _mm256_cmp_ps(v, c, _CMP_GE_OQ);
+      s1 = _mm256_add_ps(s1, _mm256_and_ps(up, v));
+      s0 = _mm256_add_ps(s0, _mm256_andnot_ps(up, v));
+      n1 = _mm256_add_ps(n1, _mm256_and_ps(up, one));
+      n0 = _mm256_add_ps(n0, _mm256_andnot_ps(up, one));
+    }
+    const __m256 has1 = _mm256_cmp_ps(n1, zero, _CMP_GT_OQ), has0 = _mm256_cmp_ps(n0, zero, _CMP_GT_OQ);
+    const __m256 con = _mm256_sub_ps(_mm256_div_ps(s1, _mm256_blendv_ps(one, n1, has1)),
+                                     _mm256_div_ps(s0, _mm256_blendv_ps(one, n0, has0)));
+    const __m256 lo = _mm256_mul_ps(_mm256_sub_ps(con, err), fine), hi = _mm256_mul_ps(_mm256_add_ps(con, err), fine);
+    const __m256i step = _mm256_min_epi32(_mm256_cvttps_epi32(lo), top);
+    const __m256i step_hi = _mm256_min_epi32(_mm256_cvttps_epi32(hi), top);
+    const __m256i sure = _mm256_and_si256(_mm256_castps_si256(_mm256_cmp_ps(lo, zero, _CMP_GT_OQ)),
+                                          _mm256_cmpeq_epi32(step, step_hi));
+    const __m256i v = _mm256_blendv_epi8(recheck, _mm256_add_epi32(step, inc), sure);
+    const __m256i res = _mm256_and_si256(v, _mm256_castps_si256(_mm256_and_ps(has1, has0)));
+    // 32 -> 16 bits (values <= 0xFFFF): packus works per 128-bit half, the permute restores order.
+    const __m256i packed = _mm256_permute4x64_epi64(_mm256_packus_epi32(res, res), 0x08);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + x), _mm256_castsi256_si128(packed));
+  }
+  contrast_row_impl<63>(p + x, off, n - x, out + x);
+}
+
+#endif
+
+std::atomic<bool> g_vector_texture{true};
+
+bool use_avx2_kernel() {
+#ifdef OCCSEG_TEXTURE_AVX2
+  static const bool cpu = __builtin_cpu_supports("avx2");
+  return cpu && g_vector_texture.load(std::memory_order_relaxed);
+#else
+  return false;
+#endif
+}
+
 // lvl[x] = (v[x] != 0) + #{k : v[x] > rises[k]}.
 __attribute__((target_clones("avx2", "default")))
 void levels_row(const std::uint16_t* __restrict v, std::size_t n, const std::uint16_t* rises, std::size_t nr,
@@ -164,7 +220,12 @@ void contrast_any(const float* p, const std::ptrdiff_t* off, std::size_t n, std:
   if constexpr (P == 64) {
     (void)p, (void)off, (void)n, (void)out, (void)present;
   } else if (present == P) {
+#ifdef OCCSEG_TEXTURE_AVX2
+    if (P == 63 && use_avx2_kernel()) contrast_row_avx2(p, off, n, out);
+    else if (P == 63) contrast_row_3d(p, off, n, out);
+#else
     if (P == 63) contrast_row_3d(p, off, n, out);
+#endif
     else contrast_row_impl<P>(p, off, n, out);
   } else {
     contrast_any<P + 1>(p, off, n, out, present);
@@ -201,6 +262,10 @@ Stencil stencil(const Dims& d) {
 }
 
 }  // namespace
+
+namespace detail {
+void set_vector_texture(bool enabled) { g_vector_texture.store(enabled, std::memory_order_relaxed); }
+}  // namespace detail
 
 TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads) {
   if (contrast_bins < 2 || contrast_bins > 64)

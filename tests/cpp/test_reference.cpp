@@ -51,12 +51,19 @@ const Case kCases[] = {
 }  // namespace
 
 TEST(Reference, TextureCodesMatch) {
-  for (const Case& c : kCases) {
-    const Grid g = test::random_map(c.dims, c.seed, c.noise);
-    const TextureMap ref = reference::texture(g, 8);
-    for (int t : {1, 2, 3}) EXPECT_EQ(compute_texture(g, 8, t).codes, ref.codes) << "seed " << c.seed;
-    EXPECT_EQ(compute_texture(g, 5, 2).codes, reference::texture(g, 5).codes) << "seed " << c.seed;
+  // Both contrast kernels: the hand-written AVX2 one (where the processor has AVX2) and the
+  // compiler-vectorised one.
+  for (bool vector_kernel : {true, false}) {
+    detail::set_vector_texture(vector_kernel);
+    for (const Case& c : kCases) {
+      const Grid g = test::random_map(c.dims, c.seed, c.noise);
+      const TextureMap ref = reference::texture(g, 8);
+      for (int t : {1, 2, 3})
+        EXPECT_EQ(compute_texture(g, 8, t).codes, ref.codes) << "seed " << c.seed << " kernel " << vector_kernel;
+      EXPECT_EQ(compute_texture(g, 5, 2).codes, reference::texture(g, 5).codes) << "seed " << c.seed;
+    }
   }
+  detail::set_vector_texture(true);
 }
 
 TEST(Reference, WholePipelineMatchesForBothPresets) {
@@ -112,5 +119,10 @@ TEST(Reference, ContrastsOnStepBoundariesMatch) {
     const int nudge = r.below(5);
     v = nudge == 0 ? 0.5f : (nudge == 1 ? base : (nudge == 2 ? std::nextafter(base, 1.0f) : (nudge == 3 ? std::nextafter(base, 0.0f) : 0.75f)));
   }
-  for (int bins : {8, 64}) EXPECT_EQ(compute_texture(g, bins, 2).codes, reference::texture(g, bins).codes) << bins;
+  for (bool vector_kernel : {true, false}) {
+    detail::set_vector_texture(vector_kernel);
+    for (int bins : {8, 64})
+      EXPECT_EQ(compute_texture(g, bins, 2).codes, reference::texture(g, bins).codes) << bins << " " << vector_kernel;
+  }
+  detail::set_vector_texture(true);
 }

@@ -58,4 +58,10 @@ struct TextureMap {
 // the quantiser, a second writes the codes. Deterministic for any thread count.
 TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads);
 
+namespace detail {
+// For tests and benchmarks: false makes compute_texture use the compiler-vectorised contrast
+// kernel even where the processor has AVX2 (both give identical codes). Process-wide.
+void set_vector_texture(bool enabled);
+}  // namespace detail
+
 }  // namespace occseg
