@@ -130,9 +130,13 @@ bool sample_plane(const std::vector<Vec>& sample, std::uint64_t seed, Plane& bes
   if (sample.size() < 3) return false;
   Rng rng{seed};
   double best_cost = std::numeric_limits<double>::infinity();
-  // 256 draws of 3 points: a plane holding half the points is drawn with probability
+  // At most 256 draws of 3 points: a plane holding half the points is drawn with probability
   // 1 - (7/8)^256 > 1 - 1e-14.
-  for (int it = 0; it < 256; ++it) {
+  // Adaptive stop: once the best plane holds a fraction w of the sample, a better one would have
+  // been drawn with probability 1 - (1 - w^3)^k after k draws; stop when that exceeds 1 - 1e-9
+  // (13 draws for a clean plane holding 90 %, 155 for one holding half).
+  int needed = 256;
+  for (int it = 0; it < needed; ++it) {
     const Vec& a = sample[rng.below(sample.size())];
     const Vec& b = sample[rng.below(sample.size())];
     const Vec& c = sample[rng.below(sample.size())];
@@ -143,7 +147,11 @@ bool sample_plane(const std::vector<Vec>& sample, std::uint64_t seed, Plane& bes
     h.n = {nrm[0] / len, nrm[1] / len, nrm[2] / len};
     h.d = dot(h.n, a);
     const double score = cost(sample, h);
-    if (score < best_cost) best_cost = score, best = h;
+    if (score < best_cost) {
+      best_cost = score, best = h;
+      const double w = double(count_inliers(sample, h)) / double(sample.size());
+      if (w > 0.3) needed = std::min(256, static_cast<int>(std::ceil(std::log(1e-9) / std::log1p(-w * w * w))));
+    }
   }
   return std::isfinite(best_cost);
 }
