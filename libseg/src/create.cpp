@@ -1,5 +1,7 @@
 #include "occseg/create.hpp"
 
+#include <cstring>
+
 #include "occseg/parallel.hpp"
 #include "huge_pages.hpp"
 
@@ -23,10 +25,14 @@ std::vector<std::uint8_t> create_segments(const Grid& grid, const std::vector<Bl
     for (std::size_t i = b; i < e; ++i) {  // blocks are disjoint: no two threads write one voxel
       const Block& blk = blocks[i];
       const auto s = static_cast<std::uint8_t>(params.state_of(mean_occupancy(grid, blk)));
+      const std::size_t width = blk.hi[0] - blk.lo[0];
+      const std::uint64_t eight = 0x0101010101010101ull * s;
       for (std::uint32_t z = blk.lo[2]; z < blk.hi[2]; ++z)
         for (std::uint32_t y = blk.lo[1]; y < blk.hi[1]; ++y) {
-          std::uint8_t* row = states.data() + grid.index(0, y, z);
-          for (std::uint32_t x = blk.lo[0]; x < blk.hi[0]; ++x) row[x] = s;
+          std::uint8_t* row = states.data() + grid.index(blk.lo[0], y, z);
+          // Most leaves are Smin = 8 voxels wide: one 8-byte store per row instead of a loop.
+          if (width == 8) std::memcpy(row, &eight, 8);
+          else std::memset(row, s, width);
         }
     }
   });
