@@ -126,47 +126,45 @@ void label_components(const std::vector<std::uint8_t>& st, const Grid& g, std::v
   // the slab), then numbered 0..m-1 by first voxel; labels hold these local numbers.
   std::vector<std::uint32_t> local_count(slabs, 0);
   for_each_slab(slabs, threads, [&](std::size_t sl) {
-    {
-      const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab);
-      for (std::size_t z = zb; z < ze; ++z)
-        for (std::size_t y = 0; y < ny; ++y) {
-          const std::size_t i0 = nx * (y + ny * z);
-          const std::uint8_t* row = s + i0;
-          for (std::size_t x = 0; x < nx;) {
-            const std::size_t e = run_end(row, x, nx);
-            const auto rs = static_cast<std::uint32_t>(i0 + x);
-            std::fill(lab + i0 + x, lab + i0 + e, rs);
-            if (occupied26 && row[x] == kOccupiedState) {
-              // Neighbours before this run in scan order: row y-1 of this plane and rows y-1..y+1
-              // of the plane below, each one voxel wider on both sides.
-              const std::size_t lo = x > 0 ? x - 1 : 0, hi = std::min(nx, e + 1);
-              if (y > 0) unite_range(lab, kOccupiedState, row - nx, i0 - nx, lo, hi, rs);
-              if (z > zb)
-                for (std::size_t yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < ny; ++yy) {
-                  const std::size_t j0 = nx * (yy + ny * (z - 1));
-                  unite_range(lab, kOccupiedState, s + j0, j0, lo, hi, rs);
-                }
-            } else {
-              if (y > 0) unite_stretches(lab, row, row - nx, i0 - nx, x, e, rs);
-              if (z > zb) unite_stretches(lab, row, row - sz, i0 - sz, x, e, rs);
-            }
-            x = e;
-          }
-        }
-      // Local numbering: a run start's parent is a smaller run start of the slab, already
-      // renumbered (the parent array is being overwritten in index order).
-      std::uint32_t m = 0;
-      for (std::size_t i0 = zb * sz; i0 < ze * sz; i0 += nx)
+    const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab);
+    for (std::size_t z = zb; z < ze; ++z)
+      for (std::size_t y = 0; y < ny; ++y) {
+        const std::size_t i0 = nx * (y + ny * z);
+        const std::uint8_t* row = s + i0;
         for (std::size_t x = 0; x < nx;) {
-          const std::size_t e = run_end(s + i0, x, nx);
-          const std::size_t rs = i0 + x;
-          const std::uint32_t par = lab[rs];
-          const std::uint32_t id = par == rs ? m++ : lab[par];
-          std::fill(lab + rs, lab + i0 + e, id);
+          const std::size_t e = run_end(row, x, nx);
+          const auto rs = static_cast<std::uint32_t>(i0 + x);
+          std::fill(lab + i0 + x, lab + i0 + e, rs);
+          if (occupied26 && row[x] == kOccupiedState) {
+            // Neighbours before this run in scan order: row y-1 of this plane and rows y-1..y+1
+            // of the plane below, each one voxel wider on both sides.
+            const std::size_t lo = x > 0 ? x - 1 : 0, hi = std::min(nx, e + 1);
+            if (y > 0) unite_range(lab, kOccupiedState, row - nx, i0 - nx, lo, hi, rs);
+            if (z > zb)
+              for (std::size_t yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < ny; ++yy) {
+                const std::size_t j0 = nx * (yy + ny * (z - 1));
+                unite_range(lab, kOccupiedState, s + j0, j0, lo, hi, rs);
+              }
+          } else {
+            if (y > 0) unite_stretches(lab, row, row - nx, i0 - nx, x, e, rs);
+            if (z > zb) unite_stretches(lab, row, row - sz, i0 - sz, x, e, rs);
+          }
           x = e;
         }
-      local_count[sl] = m;
-    }
+      }
+    // Local numbering: a run start's parent is a smaller run start of the slab, already
+    // renumbered (the parent array is being overwritten in index order).
+    std::uint32_t m = 0;
+    for (std::size_t i0 = zb * sz; i0 < ze * sz; i0 += nx)
+      for (std::size_t x = 0; x < nx;) {
+        const std::size_t e = run_end(s + i0, x, nx);
+        const std::size_t rs = i0 + x;
+        const std::uint32_t par = lab[rs];
+        const std::uint32_t id = par == rs ? m++ : lab[par];
+        std::fill(lab + rs, lab + i0 + e, id);
+        x = e;
+      }
+    local_count[sl] = m;
   });
 
   // 2. Join the slabs: union-find over all local components (global index = base + local id),
@@ -220,52 +218,50 @@ void label_components(const std::vector<std::uint8_t>& st, const Grid& g, std::v
   // order, into one slot per segment present in the slab.
   std::vector<std::vector<SlotStats>> slots(slabs);
   for_each_slab(slabs, threads, [&](std::size_t sl) {
-    {
-      const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab);
-      // Slot of each local component: segments present in this slab, in order of first voxel.
-      std::vector<std::uint32_t> ids(final_id.begin() + base[sl], final_id.begin() + base[sl + 1]);
-      std::vector<std::uint32_t> uniq = ids;
-      std::sort(uniq.begin(), uniq.end());
-      uniq.erase(std::unique(uniq.begin(), uniq.end()), uniq.end());
-      std::vector<SlotStats>& out = slots[sl];
-      out.resize(uniq.size());
-      for (std::size_t k = 0; k < uniq.size(); ++k) {
-        out[k].id = uniq[k];
-        for (int a = 0; a < 3; ++a) {
-          out[k].lo[a] = std::numeric_limits<std::uint32_t>::max();
-          out[k].hi[a] = 0;
+    const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab);
+    // Slot of each local component: segments present in this slab, in order of first voxel.
+    std::vector<std::uint32_t> ids(final_id.begin() + base[sl], final_id.begin() + base[sl + 1]);
+    std::vector<std::uint32_t> uniq = ids;
+    std::sort(uniq.begin(), uniq.end());
+    uniq.erase(std::unique(uniq.begin(), uniq.end()), uniq.end());
+    std::vector<SlotStats>& out = slots[sl];
+    out.resize(uniq.size());
+    for (std::size_t k = 0; k < uniq.size(); ++k) {
+      out[k].id = uniq[k];
+      for (int a = 0; a < 3; ++a) {
+        out[k].lo[a] = std::numeric_limits<std::uint32_t>::max();
+        out[k].hi[a] = 0;
+      }
+    }
+    std::vector<std::uint32_t> slot(ids.size());
+    for (std::size_t k = 0; k < ids.size(); ++k)
+      slot[k] = static_cast<std::uint32_t>(std::lower_bound(uniq.begin(), uniq.end(), ids[k]) - uniq.begin());
+    for (std::size_t z = zb; z < ze; ++z)
+      for (std::size_t y = 0; y < ny; ++y) {
+        const std::size_t i0 = nx * (y + ny * z);
+        for (std::size_t x = 0; x < nx;) {
+          const std::uint32_t l = lab[i0 + x];
+          const std::size_t e = run_end(s + i0, x, nx);  // a run: voxels of one component
+          SlotStats& t = out[slot[l]];
+          t.state = static_cast<State>(s[i0 + x]);
+          std::fill(lab + i0 + x, lab + i0 + e, ids[l]);
+          double acc = t.mop;
+          for (std::size_t k = x; k < e; ++k) acc += p[i0 + k];  // scan order within the slab
+          t.mop = acc;
+          const std::uint64_t len = e - x;
+          t.voxels += len;
+          t.sum[0] += (static_cast<std::uint64_t>(x) + e - 1) * len / 2;
+          t.sum[1] += y * len;
+          t.sum[2] += z * len;
+          t.lo[0] = std::min<std::uint32_t>(t.lo[0], static_cast<std::uint32_t>(x));
+          t.hi[0] = std::max<std::uint32_t>(t.hi[0], static_cast<std::uint32_t>(e - 1));
+          t.lo[1] = std::min<std::uint32_t>(t.lo[1], static_cast<std::uint32_t>(y));
+          t.hi[1] = std::max<std::uint32_t>(t.hi[1], static_cast<std::uint32_t>(y));
+          t.lo[2] = std::min<std::uint32_t>(t.lo[2], static_cast<std::uint32_t>(z));
+          t.hi[2] = std::max<std::uint32_t>(t.hi[2], static_cast<std::uint32_t>(z));
+          x = e;
         }
       }
-      std::vector<std::uint32_t> slot(ids.size());
-      for (std::size_t k = 0; k < ids.size(); ++k)
-        slot[k] = static_cast<std::uint32_t>(std::lower_bound(uniq.begin(), uniq.end(), ids[k]) - uniq.begin());
-      for (std::size_t z = zb; z < ze; ++z)
-        for (std::size_t y = 0; y < ny; ++y) {
-          const std::size_t i0 = nx * (y + ny * z);
-          for (std::size_t x = 0; x < nx;) {
-            const std::uint32_t l = lab[i0 + x];
-            const std::size_t e = run_end(s + i0, x, nx);  // a run: voxels of one component
-            SlotStats& t = out[slot[l]];
-            t.state = static_cast<State>(s[i0 + x]);
-            std::fill(lab + i0 + x, lab + i0 + e, ids[l]);
-            double acc = t.mop;
-            for (std::size_t k = x; k < e; ++k) acc += p[i0 + k];  // scan order within the slab
-            t.mop = acc;
-            const std::uint64_t len = e - x;
-            t.voxels += len;
-            t.sum[0] += (static_cast<std::uint64_t>(x) + e - 1) * len / 2;
-            t.sum[1] += y * len;
-            t.sum[2] += z * len;
-            t.lo[0] = std::min<std::uint32_t>(t.lo[0], static_cast<std::uint32_t>(x));
-            t.hi[0] = std::max<std::uint32_t>(t.hi[0], static_cast<std::uint32_t>(e - 1));
-            t.lo[1] = std::min<std::uint32_t>(t.lo[1], static_cast<std::uint32_t>(y));
-            t.hi[1] = std::max<std::uint32_t>(t.hi[1], static_cast<std::uint32_t>(y));
-            t.lo[2] = std::min<std::uint32_t>(t.lo[2], static_cast<std::uint32_t>(z));
-            t.hi[2] = std::max<std::uint32_t>(t.hi[2], static_cast<std::uint32_t>(z));
-            x = e;
-          }
-        }
-    }
   });
 
   // 4. The segment table: slab shares added in slab order.
