@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "occseg/departures.hpp"
 
 using namespace occseg;
@@ -30,6 +32,56 @@ TEST(Departures, RegionAtTheMapEdgeSurvives) {
   EXPECT_EQ(m[g.index(0, 0, 0)], 1);
   EXPECT_EQ(m[g.index(1, 9, 9)], 1);
   EXPECT_EQ(m[g.index(2, 5, 5)], 0);
+}
+
+// The bit-mask opening against its definition, computed voxel by voxel: a 0.5 voxel is in a
+// region when some cube of edge 2r + 1 around a centre within r of it (centre inside the map)
+// holds only 0.5 voxels, the outside counting as 0.5. Rows of 1, 63, 64, 65 and 130 voxels
+// (word boundaries of the bit rows), radii 1-3, random masks of several densities.
+TEST(Departures, UnknownRegionsMatchTheirDefinition) {
+  std::uint64_t seed = 12345;
+  auto next = [&] {
+    seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<unsigned>(seed >> 33);
+  };
+  const Dims shapes[] = {{1, 9, 7}, {63, 5, 6}, {64, 4, 7}, {65, 7, 3}, {130, 3, 5}, {70, 1, 1}};
+  for (const Dims& d : shapes)
+    for (int r = 1; r <= 3; ++r)
+      for (unsigned density : {50u, 85u, 97u}) {
+        Grid g(d, 0.2f);
+        for (float& v : g.p) v = next() % 100 < density ? 0.5f : 0.2f;
+        Params prm;
+        prm.gap_radius = r;
+        prm.threads = 2;
+        const auto m = unknown_regions(g, prm);
+        const long nx = long(d.nx), ny = long(d.ny), nz = long(d.nz);
+        auto half = [&](long x, long y, long z) {
+          if (x < 0 || y < 0 || z < 0 || x >= nx || y >= ny || z >= nz) return true;
+          return g.at(std::size_t(x), std::size_t(y), std::size_t(z)) == 0.5f;
+        };
+        auto cube = [&](long cx, long cy, long cz) {
+          for (long z = cz - r; z <= cz + r; ++z)
+            for (long y = cy - r; y <= cy + r; ++y)
+              for (long x = cx - r; x <= cx + r; ++x)
+                if (!half(x, y, z)) return false;
+          return true;
+        };
+        std::size_t wrong = 0, in = 0;
+        for (long z = 0; z < nz; ++z)
+          for (long y = 0; y < ny; ++y)
+            for (long x = 0; x < nx; ++x) {
+              bool want = false;
+              if (half(x, y, z))
+                for (long cz = std::max(0L, z - r); cz <= std::min(nz - 1, z + r) && !want; ++cz)
+                  for (long cy = std::max(0L, y - r); cy <= std::min(ny - 1, y + r) && !want; ++cy)
+                    for (long cx = std::max(0L, x - r); cx <= std::min(nx - 1, x + r) && !want; ++cx)
+                      want = cube(cx, cy, cz);
+              in += want;
+              wrong += m[g.index(std::size_t(x), std::size_t(y), std::size_t(z))] != (want ? 1 : 0);
+            }
+        EXPECT_EQ(wrong, 0u) << d.nx << "x" << d.ny << "x" << d.nz << " r " << r << " density " << density;
+        if (density == 97u && r == 1) EXPECT_GT(in, 0u) << "the test must see regions";
+      }
 }
 
 TEST(Departures, VoxelRules) {
