@@ -1,6 +1,6 @@
 // Support planes: splits an occupied segment into the plane it mostly lies on (a table top, a
-// floor) and the objects standing on that plane's observed side (docs/algorithm.md, "Objects on a
-// support plane"). Touching objects of one state are one connected region, so labelling alone can
+// floor) and the objects standing on that plane's observed side (docs/algorithm.md, default
+// preset rule 5). Touching objects of one state are one connected region, so labelling alone can
 // never separate a mug from the table it stands on.
 #pragma once
 #include <array>
@@ -33,17 +33,18 @@ struct Plane {
 
 // The plane that most of `points` lie on: deterministic MSAC (RANSAC scoring squared distances
 // capped at kPlaneInlierDistance) over at most 4096 of them (the generator is seeded with `seed`),
-// refined by least-squares fits to the inliers. `inliers` receives how many of all points are within kPlaneInlierDistance of the
-// result. Returns false for fewer than 3 points or when all are collinear.
+// refined by least-squares fits to the inliers. `inliers` receives how many of all points are
+// within kPlaneInlierDistance of the result. Returns false for fewer than 3 points or when all
+// are collinear.
 bool fit_dominant_plane(const std::vector<std::array<double, 3>>& points, std::uint64_t seed, Plane& plane,
                         std::size_t& inliers);
 
 // Splits every occupied segment with at least `min_plane` voxels whose dominant plane holds at
 // least `min_plane` of them and at least half of them. Pieces of the rest (connected as
-// `occupied26` says) that lie on the plane's open side (the side its voxels see free space on), have
-// at least kMinObjectVoxels voxels and rise at least max(kMinObjectHeight, kNoiseHeights x sigma)
-// above it (sigma: the robust spread of the surface along the normal) become new segments, numbered after all existing ones in the
-// order of their first voxel; everything else (the plane, pieces on its far side such as a table's
+// `occupied26` says) that lie on the plane's open side (the side its voxels see free space on),
+// have at least kMinObjectVoxels voxels and rise at least max(kMinObjectHeight, kNoiseHeights x
+// sigma) above it (sigma: the robust spread of the surface along the normal) become new segments,
+// numbered after all existing ones in the order of their first voxel; everything else (the plane, pieces on its far side such as a table's
 // legs, small or low pieces) stays in the segment, whose first component keeps its id (further
 // components get new ids too, or join the object they touch when smaller than kMinObjectVoxels).
 // A segment whose best plane holds under 40 % of a 4096-voxel sample is dropped before its voxels
