@@ -44,12 +44,13 @@ bool fit_dominant_plane(const std::vector<std::array<double, 3>>& points, std::u
 // `occupied26` says) that lie on the plane's open side (the side its voxels see free space on),
 // have at least kMinObjectVoxels voxels and rise at least max(kMinObjectHeight, kNoiseHeights x
 // sigma) above it (sigma: the robust spread of the surface along the normal) become new segments,
-// numbered after all existing ones in the order of their first voxel; everything else (the plane, pieces on its far side such as a table's
-// legs, small or low pieces) stays in the segment, whose first component keeps its id (further
-// components get new ids too, or join the object they touch when smaller than kMinObjectVoxels).
-// A segment whose best plane holds under 40 % of a 4096-voxel sample is dropped before its voxels
-// are listed. Statistics of changed segments are recomputed. Runs on one thread, segment by
-// segment, so results never depend on the thread count.
+// numbered after all existing ones in the order of their first voxel. Everything else (the
+// plane, pieces on its far side such as a table's legs, small or low pieces) stays in the
+// segment, whose first component keeps its id (further components get new ids too, or join the
+// object they touch when smaller than kMinObjectVoxels). A segment whose best plane holds under
+// 40 % of a 4096-voxel sample is dropped before its voxels are listed. Statistics of changed
+// segments are recomputed. Runs on one thread, segment by segment, so results never depend on
+// the thread count.
 void split_support_planes(const Grid& grid, std::vector<std::uint32_t>& labels, std::vector<Segment>& segments,
                           std::size_t min_plane, bool occupied26);
 
