@@ -56,22 +56,9 @@ inline std::size_t run_end(const std::uint8_t* s, std::size_t x, std::size_t nx)
   return find_first(s, s[x], false, x + 1, nx);
 }
 
-// Unites run [x0, x1) of row `cur` (label root `rs`) with every stretch of equal state in the
-// row `other` next to it (one union per stretch: the voxels of a stretch share one run).
-inline void unite_stretches(std::uint32_t* labels, const std::uint8_t* cur, const std::uint8_t* other,
-                            std::size_t other_index, std::size_t x0, std::size_t x1, std::uint32_t rs) {
-  const std::uint8_t v = cur[x0];
-  std::size_t x = x0;
-  while (x < x1) {
-    x = find_first(other, v, true, x, x1);
-    if (x == x1) break;
-    unite(labels, rs, labels[other_index + x]);
-    x = find_first(other, v, false, x + 1, x1);
-  }
-}
-
-// Unites run [x0, x1) of state v (label root `rs`) with every stretch of state v in row `other`
-// over [lo, hi): the 26-connected case, where diagonal neighbours count.
+// Unites a run of state v (label root `rs`) with every stretch of state v in row `other` over
+// [lo, hi), one union per stretch (the voxels of a stretch share one run): [lo, hi) is the run's
+// own extent for 6-connectivity, one voxel wider on both sides for 26.
 inline void unite_range(std::uint32_t* labels, std::uint8_t v, const std::uint8_t* other, std::size_t other_index,
                         std::size_t lo, std::size_t hi, std::uint32_t rs) {
   std::size_t x = lo;
@@ -146,8 +133,8 @@ void label_components(const std::vector<std::uint8_t>& st, const Grid& g, std::v
                 unite_range(lab, kOccupiedState, s + j0, j0, lo, hi, rs);
               }
           } else {
-            if (y > 0) unite_stretches(lab, row, row - nx, i0 - nx, x, e, rs);
-            if (z > zb) unite_stretches(lab, row, row - sz, i0 - sz, x, e, rs);
+            if (y > 0) unite_range(lab, row[x], row - nx, i0 - nx, x, e, rs);
+            if (z > zb) unite_range(lab, row[x], row - sz, i0 - sz, x, e, rs);
           }
           x = e;
         }
