@@ -204,8 +204,7 @@ class Splitter {
     if (!sample_plane(pts_, 0x6F6363736567ull ^ (std::uint64_t(first_voxel) * 0x9E3779B97F4A7C15ull), pl) ||
         10 * count_inliers(pts_, pl) < 4 * pts_.size())  // under 40 %: far from half
       return;
-    members_.clear();
-    for_members(s, first, last, [&](std::uint32_t v, std::size_t) { members_.push_back(v); });
+    list_members(s, first, last);
     pts_.resize(n);
     for (std::size_t m = 0; m < n; ++m) pts_[m] = coords(members_[m]);
     const std::size_t inliers = refine_plane(pts_, pl);
@@ -279,20 +278,19 @@ class Splitter {
       }
   }
 
-  // Calls f(voxel, rank) for the voxels of s in scan order.
-  template <typename F>
-  void for_members(std::uint32_t s, const std::uint32_t* first, const std::uint32_t* last, F&& f) const {
-    std::size_t rank = 0;
+  // members_ = the voxels of s in scan order: the bucket, or a scan of its box.
+  void list_members(std::uint32_t s, const std::uint32_t* first, const std::uint32_t* last) {
     if (first) {
-      for (const std::uint32_t* v = first; v != last; ++v) f(*v, rank++);
+      members_.assign(first, last);
       return;
     }
+    members_.clear();
     const Segment& seg = segs_[s];
     for (std::size_t z = seg.bbox_min[2]; z <= seg.bbox_max[2]; ++z)
       for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1]; ++y) {
         const std::size_t row = g_.index(0, y, z);
         for (std::size_t x = seg.bbox_min[0]; x <= seg.bbox_max[0]; ++x)
-          if (labels_[row + x] == s) f(static_cast<std::uint32_t>(row + x), rank++);
+          if (labels_[row + x] == s) members_.push_back(static_cast<std::uint32_t>(row + x));
       }
   }
 
