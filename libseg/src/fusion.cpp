@@ -221,14 +221,14 @@ void finish_walk(const Walk& w, const Dims& dims, TouchBox& box) {
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #define OCCSEG_FUSION_AVX2 1
-// Walks in the four lanes of AVX2 registers, kGroups registers' worth at once, one step of each per
-// iteration: the same IEEE operations as step() (LT_OS compares, masked adds of tdelta), so the
-// same voxels, at about a quarter of the instructions per voxel step; the groups' dependency
-// chains (compare, mask, add: ~10 cycles) overlap. Lanes go to memory only when one of them ends
-// (about once per hundred steps). All lanes start live; `refill(k)` starts the next ray in w[k]
-// and returns false when there is none: then live[k] turns false and the function returns, leaving
-// the walks still going in `w` for step() to finish.
-constexpr int kGroups = 1, kVectorLanes = 4 * kGroups;
+// Four walks in the four lanes of AVX2 registers, one step of each per iteration: the same IEEE
+// operations as step() (LT_OS compares, masked adds of tdelta), so the same voxels, at about a
+// quarter of the instructions per voxel step (two groups of four lanes per iteration were slower:
+// register spills). Lanes go to memory only when one of them ends (about once per hundred steps).
+// All lanes start live; `refill(k)` starts the next ray in w[k] and returns false when there is
+// none: then live[k] turns false and the function returns, leaving the walks still going in `w`
+// for step() to finish.
+constexpr int kVectorLanes = 4;
 
 struct alignas(32) Lanes {
   double tx[kVectorLanes], ty[kVectorLanes], tz[kVectorLanes], dx[kVectorLanes], dy[kVectorLanes], dz[kVectorLanes];
@@ -252,8 +252,13 @@ struct alignas(32) Lanes {
   }
 };
 
-#define OCCSEG_LD(field, g) _mm256_load_si256(reinterpret_cast<const __m256i*>(L.field + 4 * (g)))
-#define OCCSEG_ST(field, g, v) _mm256_store_si256(reinterpret_cast<__m256i*>(L.field + 4 * (g)), v)
+// Four 64-bit lanes of a Lanes field (lambdas would not inherit the target attribute).
+__attribute__((target("avx2"))) inline __m256i load(const std::int64_t* f) {
+  return _mm256_load_si256(reinterpret_cast<const __m256i*>(f));
+}
+__attribute__((target("avx2"))) inline void store(std::int64_t* f, __m256i v) {
+  _mm256_store_si256(reinterpret_cast<__m256i*>(f), v);
+}
 
 template <typename Refill>
 __attribute__((target("avx2"))) void walk_vector_avx2(Walk (&w)[kVectorLanes], bool (&live)[kVectorLanes],
@@ -263,50 +268,41 @@ __attribute__((target("avx2"))) void walk_vector_avx2(Walk (&w)[kVectorLanes], b
   for (int k = 0; k < kVectorLanes; ++k) L.put(k, w[k]);
   const __m256i ones = _mm256_set1_epi64x(-1), zero = _mm256_setzero_si256();
   for (;;) {
-    __m256d tx[kGroups], ty[kGroups], tz[kGroups];
-    __m256i i[kGroups], rx[kGroups], ry[kGroups], rz[kGroups], budget[kGroups];
-    for (int g = 0; g < kGroups; ++g) {
-      tx[g] = _mm256_load_pd(L.tx + 4 * g), ty[g] = _mm256_load_pd(L.ty + 4 * g), tz[g] = _mm256_load_pd(L.tz + 4 * g);
-      i[g] = OCCSEG_LD(i, g), rx[g] = OCCSEG_LD(rx, g), ry[g] = OCCSEG_LD(ry, g), rz[g] = OCCSEG_LD(rz, g);
-      budget[g] = OCCSEG_LD(budget, g);
-    }
+    __m256d tx = _mm256_load_pd(L.tx), ty = _mm256_load_pd(L.ty), tz = _mm256_load_pd(L.tz);
+    const __m256d dx = _mm256_load_pd(L.dx), dy = _mm256_load_pd(L.dy), dz = _mm256_load_pd(L.dz);
+    __m256i i = load(L.i), rx = load(L.rx), ry = load(L.ry), rz = load(L.rz), budget = load(L.budget);
+    const __m256i end = load(L.end), sx = load(L.sx), sy = load(L.sy), sz = load(L.sz);
     int done = 0;
     while (!done) {
-      for (int g = 0; g < kGroups; ++g) {
-        alignas(32) std::uint64_t at[4];
-        _mm256_store_si256(reinterpret_cast<__m256i*>(at), i[g]);
-        const __m256i eq = _mm256_cmpeq_epi64(i[g], OCCSEG_LD(end, g));
-        const int eqm = _mm256_movemask_pd(_mm256_castsi256_pd(eq));
-        for (int k = 0; k < 4; ++k) mark(marks + at[k], (eqm >> k & 1) ? w[4 * g + k].end_bit : 1);
-        const __m256d xy = _mm256_cmp_pd(tx[g], ty[g], _CMP_LT_OS), xz = _mm256_cmp_pd(tx[g], tz[g], _CMP_LT_OS);
-        const __m256d yz = _mm256_cmp_pd(ty[g], tz[g], _CMP_LT_OS);
-        const __m256d mx = _mm256_and_pd(xy, xz), my = _mm256_andnot_pd(xy, yz);
-        const __m256d mz = _mm256_andnot_pd(_mm256_or_pd(mx, my), _mm256_castsi256_pd(ones));
-        // A lane at its end voxel is over (step() returns before moving); its tmax and index are
-        // not used again, only its room counters must not move.
-        tx[g] = _mm256_add_pd(tx[g], _mm256_and_pd(mx, _mm256_load_pd(L.dx + 4 * g)));
-        ty[g] = _mm256_add_pd(ty[g], _mm256_and_pd(my, _mm256_load_pd(L.dy + 4 * g)));
-        tz[g] = _mm256_add_pd(tz[g], _mm256_and_pd(mz, _mm256_load_pd(L.dz + 4 * g)));
-        const __m256i kx = _mm256_andnot_si256(eq, _mm256_castpd_si256(mx));
-        const __m256i ky = _mm256_andnot_si256(eq, _mm256_castpd_si256(my));
-        const __m256i kz = _mm256_andnot_si256(eq, _mm256_castpd_si256(mz));
-        i[g] = _mm256_add_epi64(
-            i[g], _mm256_or_si256(_mm256_or_si256(_mm256_and_si256(OCCSEG_LD(sx, g), kx), _mm256_and_si256(OCCSEG_LD(sy, g), ky)),
-                                  _mm256_and_si256(OCCSEG_LD(sz, g), kz)));
-        rx[g] = _mm256_add_epi64(rx[g], kx);
-        ry[g] = _mm256_add_epi64(ry[g], ky);
-        rz[g] = _mm256_add_epi64(rz[g], kz);
-        budget[g] = _mm256_add_epi64(budget[g], ones);
-        const __m256i out = _mm256_or_si256(_mm256_or_si256(rx[g], ry[g]), rz[g]);  // sign: left the grid
-        const __m256i over = _mm256_or_si256(_mm256_or_si256(eq, _mm256_cmpeq_epi64(budget[g], zero)), out);
-        done |= _mm256_movemask_pd(_mm256_castsi256_pd(over)) << (4 * g);
-      }
+      alignas(32) std::uint64_t at[4];
+      _mm256_store_si256(reinterpret_cast<__m256i*>(at), i);
+      const __m256i eq = _mm256_cmpeq_epi64(i, end);
+      const int eqm = _mm256_movemask_pd(_mm256_castsi256_pd(eq));
+      for (int k = 0; k < 4; ++k) mark(marks + at[k], (eqm >> k & 1) ? w[k].end_bit : 1);
+      const __m256d xy = _mm256_cmp_pd(tx, ty, _CMP_LT_OS), xz = _mm256_cmp_pd(tx, tz, _CMP_LT_OS);
+      const __m256d yz = _mm256_cmp_pd(ty, tz, _CMP_LT_OS);
+      const __m256d mx = _mm256_and_pd(xy, xz), my = _mm256_andnot_pd(xy, yz);
+      const __m256d mz = _mm256_andnot_pd(_mm256_or_pd(mx, my), _mm256_castsi256_pd(ones));
+      // A lane at its end voxel is over (step() returns before moving); its tmax and index are
+      // not used again, only its room counters must not move.
+      tx = _mm256_add_pd(tx, _mm256_and_pd(mx, dx));
+      ty = _mm256_add_pd(ty, _mm256_and_pd(my, dy));
+      tz = _mm256_add_pd(tz, _mm256_and_pd(mz, dz));
+      const __m256i kx = _mm256_andnot_si256(eq, _mm256_castpd_si256(mx));
+      const __m256i ky = _mm256_andnot_si256(eq, _mm256_castpd_si256(my));
+      const __m256i kz = _mm256_andnot_si256(eq, _mm256_castpd_si256(mz));
+      i = _mm256_add_epi64(i, _mm256_or_si256(_mm256_or_si256(_mm256_and_si256(sx, kx), _mm256_and_si256(sy, ky)),
+                                              _mm256_and_si256(sz, kz)));
+      rx = _mm256_add_epi64(rx, kx);
+      ry = _mm256_add_epi64(ry, ky);
+      rz = _mm256_add_epi64(rz, kz);
+      budget = _mm256_add_epi64(budget, ones);
+      const __m256i out = _mm256_or_si256(_mm256_or_si256(rx, ry), rz);  // sign: left the grid
+      const __m256i over = _mm256_or_si256(_mm256_or_si256(eq, _mm256_cmpeq_epi64(budget, zero)), out);
+      done = _mm256_movemask_pd(_mm256_castsi256_pd(over));
     }
-    for (int g = 0; g < kGroups; ++g) {
-      _mm256_store_pd(L.tx + 4 * g, tx[g]), _mm256_store_pd(L.ty + 4 * g, ty[g]), _mm256_store_pd(L.tz + 4 * g, tz[g]);
-      OCCSEG_ST(i, g, i[g]), OCCSEG_ST(rx, g, rx[g]), OCCSEG_ST(ry, g, ry[g]), OCCSEG_ST(rz, g, rz[g]);
-      OCCSEG_ST(budget, g, budget[g]);
-    }
+    _mm256_store_pd(L.tx, tx), _mm256_store_pd(L.ty, ty), _mm256_store_pd(L.tz, tz);
+    store(L.i, i), store(L.rx, rx), store(L.ry, ry), store(L.rz, rz), store(L.budget, budget);
     bool all_live = true;
     for (int k = 0; k < kVectorLanes; ++k) {
       if (!(done >> k & 1)) continue;
@@ -322,8 +318,6 @@ __attribute__((target("avx2"))) void walk_vector_avx2(Walk (&w)[kVectorLanes], b
     }
   }
 }
-#undef OCCSEG_LD
-#undef OCCSEG_ST
 #endif
 
 // Calls fn(row start index, x0, x1) for every x-row of the box, rows spread over threads.
