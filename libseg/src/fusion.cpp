@@ -11,6 +11,7 @@
 
 #include "occseg/error.hpp"
 #include "occseg/parallel.hpp"
+#include "cpu_features.hpp"
 #include "huge_pages.hpp"
 
 namespace occseg {
@@ -20,14 +21,7 @@ double logit(double p) { return std::log(p / (1 - p)); }
 std::atomic<bool> g_vector_walk{true};
 // The AVX2 walk where the processor has AVX2 (checked at run time: the library is built for
 // generic x86-64) and no test asked for the SSE2 one.
-[[maybe_unused]] bool use_avx2() {
-#if defined(__x86_64__) && defined(__GNUC__)
-  static const bool cpu = __builtin_cpu_supports("avx2");
-  return cpu && g_vector_walk.load(std::memory_order_relaxed);
-#else
-  return false;
-#endif
-}
+[[maybe_unused]] bool use_avx2() { return cpu_has_avx2() && g_vector_walk.load(std::memory_order_relaxed); }
 }  // namespace
 
 namespace detail {

@@ -6,6 +6,7 @@
 
 #include "occseg/error.hpp"
 #include "occseg/parallel.hpp"
+#include "cpu_features.hpp"
 #include "huge_pages.hpp"
 
 namespace occseg {
@@ -187,14 +188,7 @@ __attribute__((target("avx2"))) void contrast_row_avx2(const float* p, const std
 
 std::atomic<bool> g_vector_texture{true};
 
-bool use_avx2_kernel() {
-#ifdef OCCSEG_TEXTURE_AVX2
-  static const bool cpu = __builtin_cpu_supports("avx2");
-  return cpu && g_vector_texture.load(std::memory_order_relaxed);
-#else
-  return false;
-#endif
-}
+[[maybe_unused]] bool use_avx2_kernel() { return cpu_has_avx2() && g_vector_texture.load(std::memory_order_relaxed); }
 
 // lvl[x] = (v[x] != 0) + #{k : v[x] > rises[k]}.
 __attribute__((target_clones("avx2", "default")))
