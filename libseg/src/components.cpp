@@ -1,7 +1,6 @@
 #include "occseg/components.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <limits>
 
 #include "occseg/error.hpp"
@@ -70,17 +69,14 @@ inline void unite_range(std::uint32_t* labels, std::uint8_t v, const std::uint8_
   }
 }
 
-// Calls fn(slab) for every slab, threads taking the next slab from a shared counter: slabs differ
-// widely in cost (on the noisy benchmark map the lower half took 30 ms per slab, the upper 1 ms),
-// so fixed halves left one thread idle. Each slab's work only writes its own data, so the order
-// changes nothing.
+// Calls fn(slab) for every slab, through parallel_for_dynamic: slabs differ widely in cost (on the
+// noisy benchmark map the lower half took 30 ms per slab, the upper 1 ms), so fixed halves left
+// one thread idle. Each slab's work only writes its own data, so the order changes nothing.
 template <typename Fn>
 void for_each_slab(std::size_t slabs, int threads, Fn&& fn) {
-  std::atomic<std::size_t> next{0};
-  parallel_for(std::min<std::size_t>(slabs, static_cast<std::size_t>(resolve_threads(threads))), threads,
-               [&](std::size_t, std::size_t) {
-                 for (std::size_t sl; (sl = next.fetch_add(1, std::memory_order_relaxed)) < slabs;) fn(sl);
-               });
+  parallel_for_dynamic(slabs, threads, [&](std::size_t b, std::size_t e) {
+    for (std::size_t sl = b; sl < e; ++sl) fn(sl);
+  });
 }
 
 constexpr std::uint8_t kOccupiedState = static_cast<std::uint8_t>(State::occupied);
