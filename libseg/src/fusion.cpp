@@ -84,13 +84,13 @@ struct TouchBox {
   bool empty() const { return hi[0] < lo[0]; }
 };
 
-// Marks one voxel. Reading first skips the locked read-modify-write when the mark is already
-// there (most voxels near the sensor are crossed by many rays) and keeps the cache line shared
-// between threads. A miss is dropped on any marked voxel: the apply pass only asks "marked?"
-// and "hit?", so a miss adds nothing to a voxel that is already marked.
-inline void mark(std::uint8_t* m, std::uint8_t bit) {
-  const std::uint8_t v = __atomic_load_n(m, __ATOMIC_RELAXED);
-  if (bit == 1 ? v == 0 : !(v & 2)) __atomic_fetch_or(m, bit, __ATOMIC_RELAXED);
+// Marks one voxel as crossed. While rays are walked only this value is ever written (hits are
+// collected in lists and written after every walk is done, see insert_scan), so concurrent
+// walks need no locked read-modify-write: a relaxed load and, on an unmarked voxel, a relaxed
+// store. Reading first keeps the cache line shared between threads where many rays cross (near
+// the sensor) instead of bouncing it with stores.
+inline void mark_crossed(std::uint8_t* m) {
+  if (__atomic_load_n(m, __ATOMIC_RELAXED) == 0) __atomic_store_n(m, std::uint8_t(1), __ATOMIC_RELAXED);
 }
 
 // One Amanatides & Woo voxel traversal in progress. Each step depends on the previous one (compare
@@ -101,7 +101,8 @@ struct Walk {
   std::uint64_t i, end, sx, sy, sz;  // voxel index, end voxel index, index strides of one step
   long rx, ry, rz, budget;          // steps left along each axis inside the grid; steps left
   long c0[3], room[3], step[3];     // start voxel, initial room, step signs (for the touched box)
-  std::uint8_t end_bit;             // 2: the end voxel holds a return, 1: it is only crossed
+  bool hit;                         // the end voxel holds a return (else it is only crossed)
+  bool at_end;                      // the walk stopped on its end voxel (set when it is over)
 };
 
 // Sets up the traversal of the segment a -> b (grid units: (world - origin) / voxel_size),
@@ -171,19 +172,20 @@ bool start_walk(const double* a, const double* b, bool hit, const Dims& dims, Wa
   w.dx = _mm_set_sd(tdelta[0]);
   w.dy = _mm_set_sd(tdelta[1]);
   w.dz = _mm_set_sd(tdelta[2]);
-  w.end_bit = end_inside ? 2 : 1;
+  w.hit = end_inside;
+  w.at_end = false;
   return true;
 }
 
-// Marks the current voxel (a miss, or the end voxel's bit) and moves one voxel on; false when
-// the walk is over. The axis is chosen with compare masks, not branches (the choice is a coin
+// Marks the current voxel crossed and moves one voxel on; false when the walk is over (at_end
+// tells whether it stopped on its end voxel). The axis is chosen with compare masks, not branches (the choice is a coin
 // flip on oblique rays), and each tmax gets + tdelta or + 0.0, which leaves it unchanged.
 inline bool step(Walk& w, std::uint8_t* marks) {
+  mark_crossed(marks + w.i);
   if (w.i == w.end) {
-    mark(marks + w.i, w.end_bit);
+    w.at_end = true;
     return false;
   }
-  mark(marks + w.i, 1);
   // Same choice as tmax[0] < tmax[1] ? (tmax[0] < tmax[2] ? 0 : 2) : (tmax[1] < tmax[2] ? 1 : 2).
   const __m128d xy = _mm_cmplt_sd(w.tx, w.ty), xz = _mm_cmplt_sd(w.tx, w.tz), yz = _mm_cmplt_sd(w.ty, w.tz);
   const __m128d mx = _mm_and_pd(xy, xz), my = _mm_andnot_pd(xy, yz);
@@ -204,13 +206,15 @@ inline bool step(Walk& w, std::uint8_t* marks) {
 }
 
 // Adds the voxels a finished walk covered to the box: walks are monotone along each axis, and
-// went no further than the steps they took (a step out of the grid was counted, not taken).
-void finish_walk(const Walk& w, const Dims& dims, TouchBox& box) {
+// went no further than the steps they took (a step out of the grid was counted, not taken). A
+// walk that reached its end voxel with a return lists it in `hits`.
+void finish_walk(const Walk& w, const Dims& dims, TouchBox& box, std::vector<std::uint64_t>& hits) {
   const long moved[3] = {w.room[0] - w.rx, w.room[1] - w.ry, w.room[2] - w.rz};
   const long n[3] = {static_cast<long>(dims.nx), static_cast<long>(dims.ny), static_cast<long>(dims.nz)};
   long fin[3];
   for (int k = 0; k < 3; ++k) fin[k] = std::clamp(w.c0[k] + w.step[k] * moved[k], 0L, n[k] - 1);
   box.add(fin);
+  if (w.at_end && w.hit) hits.push_back(w.end);
 }
 
 #if defined(__x86_64__) && defined(__GNUC__)
@@ -257,7 +261,7 @@ __attribute__((target("avx2"))) inline void store(std::int64_t* f, __m256i v) {
 template <typename Refill>
 __attribute__((target("avx2"))) void walk_vector_avx2(Walk (&w)[kVectorLanes], bool (&live)[kVectorLanes],
                                                       std::uint8_t* marks, const Dims& dims, TouchBox& box,
-                                                      Refill&& refill) {
+                                                      std::vector<std::uint64_t>& hits, Refill&& refill) {
   Lanes L;
   for (int k = 0; k < kVectorLanes; ++k) L.put(k, w[k]);
   const __m256i ones = _mm256_set1_epi64x(-1), zero = _mm256_setzero_si256();
@@ -266,13 +270,13 @@ __attribute__((target("avx2"))) void walk_vector_avx2(Walk (&w)[kVectorLanes], b
     const __m256d dx = _mm256_load_pd(L.dx), dy = _mm256_load_pd(L.dy), dz = _mm256_load_pd(L.dz);
     __m256i i = load(L.i), rx = load(L.rx), ry = load(L.ry), rz = load(L.rz), budget = load(L.budget);
     const __m256i end = load(L.end), sx = load(L.sx), sy = load(L.sy), sz = load(L.sz);
-    int done = 0;
+    int done = 0, eqm = 0;
     while (!done) {
       alignas(32) std::uint64_t at[4];
       _mm256_store_si256(reinterpret_cast<__m256i*>(at), i);
       const __m256i eq = _mm256_cmpeq_epi64(i, end);
-      const int eqm = _mm256_movemask_pd(_mm256_castsi256_pd(eq));
-      for (int k = 0; k < 4; ++k) mark(marks + at[k], (eqm >> k & 1) ? w[k].end_bit : 1);
+      eqm = _mm256_movemask_pd(_mm256_castsi256_pd(eq));  // lanes on their end voxel: over
+      for (int k = 0; k < 4; ++k) mark_crossed(marks + at[k]);
       const __m256d xy = _mm256_cmp_pd(tx, ty, _CMP_LT_OS), xz = _mm256_cmp_pd(tx, tz, _CMP_LT_OS);
       const __m256d yz = _mm256_cmp_pd(ty, tz, _CMP_LT_OS);
       const __m256d mx = _mm256_and_pd(xy, xz), my = _mm256_andnot_pd(xy, yz);
@@ -301,7 +305,8 @@ __attribute__((target("avx2"))) void walk_vector_avx2(Walk (&w)[kVectorLanes], b
     for (int k = 0; k < kVectorLanes; ++k) {
       if (!(done >> k & 1)) continue;
       L.get(k, w[k]);
-      finish_walk(w[k], dims, box);
+      w[k].at_end = eqm >> k & 1;
+      finish_walk(w[k], dims, box, hits);
       if (refill(k)) L.put(k, w[k]);
       else live[k] = all_live = false;
     }
@@ -374,7 +379,7 @@ void OccupancyFusion::insert_scan(const Vec3& sensor, const float* xyz, std::siz
   constexpr int kSlots = kLanes;
   const bool avx2 = false;
 #endif
-  auto walk_rays = [&](std::size_t r, std::size_t e, TouchBox& box) {
+  auto walk_rays = [&](std::size_t r, std::size_t e, TouchBox& box, std::vector<std::uint64_t>& hits) {
     Walk lanes[kSlots];
     bool busy[kSlots] = {};
     int active = 0;
@@ -387,7 +392,7 @@ void OccupancyFusion::insert_scan(const Vec3& sensor, const float* xyz, std::siz
     if (avx2) {
       for (int k = 0; k < kVectorLanes; ++k) active += busy[k] = refill(k);
       if (active == kVectorLanes)
-        walk_vector_avx2(lanes, busy, marks, frame_.dims, box, refill);
+        walk_vector_avx2(lanes, busy, marks, frame_.dims, box, hits, refill);
       active = 0;  // the rest of the walks finish one by one below
     }
 #endif
@@ -396,7 +401,7 @@ void OccupancyFusion::insert_scan(const Vec3& sensor, const float* xyz, std::siz
       while (active == kLanes) {
         for (int k = 0; k < kLanes; ++k)
           if (!step(lanes[k], marks)) {
-            finish_walk(lanes[k], frame_.dims, box);
+            finish_walk(lanes[k], frame_.dims, box, hits);
             if (!refill(k)) {
               busy[k] = false;
               --active;
@@ -408,29 +413,36 @@ void OccupancyFusion::insert_scan(const Vec3& sensor, const float* xyz, std::siz
       if (busy[k]) {
         while (step(lanes[k], marks)) {
         }
-        finish_walk(lanes[k], frame_.dims, box);
+        finish_walk(lanes[k], frame_.dims, box, hits);
       }
   };
   TouchBox box;
+  std::vector<std::uint64_t> hits;  // end voxels holding a return, written after the walks
   std::mutex box_mutex;
-  // With a progress callback rays go in chunks, so long scans report; marks are ORed, so the
-  // chunking changes nothing in the result.
+  // With a progress callback rays go in chunks, so long scans report; marks only ever grow, so
+  // the chunking changes nothing in the result.
   const std::size_t chunk = progress_ ? std::size_t(1) << 16 : std::max<std::size_t>(count, 1);
   for (std::size_t c0 = 0; c0 < count; c0 += chunk) {
     const std::size_t c1 = std::min(count, c0 + chunk);
     // Threads take blocks of rays from a shared counter: ray lengths vary across a cloud (floor
-    // near, wall far), so fixed halves left one thread idle. Marks are ORed, so which thread
-    // walks which ray changes nothing.
+    // near, wall far), so fixed halves left one thread idle. Marks only ever grow, so which
+    // thread walks which ray changes nothing.
     constexpr std::size_t kBlock = 2048;
     const std::size_t blocks = (c1 - c0 + kBlock - 1) / kBlock;
     std::atomic<std::size_t> next{0};
     parallel_for(std::min<std::size_t>(blocks, resolve_threads(threads)), threads, [&](std::size_t, std::size_t) {
       TouchBox mine;
+      std::vector<std::uint64_t> my_hits;
       for (std::size_t k; (k = next.fetch_add(1, std::memory_order_relaxed)) < blocks;)
-        walk_rays(c0 + k * kBlock, std::min(c1, c0 + (k + 1) * kBlock), mine);
+        walk_rays(c0 + k * kBlock, std::min(c1, c0 + (k + 1) * kBlock), mine, my_hits);
       std::lock_guard<std::mutex> lock(box_mutex);
       box.merge(mine);
+      hits.insert(hits.end(), my_hits.begin(), my_hits.end());
     });
+    // Hits go in once every walk of the chunk is over: a concurrent "crossed" mark could have
+    // overwritten them (it stores without a locked read-modify-write).
+    for (std::uint64_t h : hits) marks[h] = 2;
+    hits.clear();
     if (progress_ && !progress_(c1, count)) {
       for_box_rows(box, frame_.dims, threads, [&](std::size_t row, std::size_t x0, std::size_t x1) {
         std::fill(marks + row + x0, marks + row + x1, std::uint8_t(0));

@@ -68,7 +68,7 @@ class OccupancyFusion {
   SensorModel model_;
   float l_hit_, l_miss_, l_min_, l_max_;
   std::vector<float> log_odds_;
-  std::vector<std::uint8_t> marks_;  // per scan: bit 0 miss, bit 1 hit; all zero between scans
+  std::vector<std::uint8_t> marks_;  // per scan: 1 crossed, 2 hit; all zero between scans
   std::uint64_t scans_ = 0, rays_ = 0;
   Progress progress_;
 };
