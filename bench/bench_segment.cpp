@@ -1,15 +1,18 @@
 // Helper of bench/compare: writes the benchmark maps as .npy and times occseg::segment() on a
 // map file inside the process (no file I/O in the figures), reporting JSON on stdout.
 //   occseg_bench_segment make scene|noisy NX NY NZ out.npy
-//   occseg_bench_segment time map.npy PRESET THREADS REPEATS
+//   occseg_bench_segment time map.npy PRESET THREADS REPEATS [context]
+// With "context" every call goes through one occseg::Context (its threads and buffers reused).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "occseg/context.hpp"
 #include "occseg/npy.hpp"
 #include "occseg/segment.hpp"
 #include "scenes.hpp"
@@ -42,7 +45,7 @@ void reset_peak() {
 int usage() {
   std::fprintf(stderr,
                "usage: occseg_bench_segment make scene|noisy NX NY NZ out.npy\n"
-               "       occseg_bench_segment time map.npy paper|default THREADS REPEATS\n");
+               "       occseg_bench_segment time map.npy paper|default THREADS REPEATS [context]\n");
   return 2;
 }
 
@@ -57,24 +60,29 @@ int main(int argc, char** argv) {
       write_grid_npy(argv[6], kind == "scene" ? bench::scene(d) : bench::noisy(d));
       return 0;
     }
-    if (argc == 6 && std::string(argv[1]) == "time") {
+    const bool timing = (argc == 6 || (argc == 7 && std::string(argv[6]) == "context")) &&
+                        std::string(argv[1]) == "time";
+    if (timing) {
       const Grid g = grid_from_npy(read_npy(argv[2]), 1.0, argv[2]);
       Params p;
       set_param(p, "preset", argv[3]);
       set_param(p, "threads", argv[4]);
       const int repeats = std::max(1, std::atoi(argv[5]));
+      std::unique_ptr<Context> ctx;
+      if (argc == 7) ctx = std::make_unique<Context>(p.threads);
+      auto run = [&] { return ctx ? segment(*ctx, g, p) : segment(g, p); };
       // Peak memory of one call beyond the map (the result's labels included), before any other
       // result is alive.
       reset_peak();
       const long rss0 = status_kb("VmRSS:");
-      { const Result first = segment(g, p); }
+      { const Result first = run(); }
       const long rss1 = status_kb("VmHWM:");
       std::vector<double> totals;
       Result best;
       double best_total = 1e300;
       for (int r = 0; r < repeats; ++r) {
         const auto t0 = std::chrono::steady_clock::now();
-        Result res = segment(g, p);
+        Result res = run();
         const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         totals.push_back(s);
         if (s < best_total) {
