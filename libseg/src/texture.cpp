@@ -185,6 +185,34 @@ __attribute__((target("avx2"))) void contrast_row_avx2(const float* p, const std
   contrast_row_impl<63>(p + x, off, n - x, out + x);
 }
 
+// Pass 2 for 8 voxels per step, in place: row[x] = lbp * bins + level, from the parked step
+// v = row[x] (level = (v != 0) + #{k : v > rises[k]}) and the six comparisons of the LBP code
+// (the same `>=` as lbp_row_impl). One pass instead of three over the row (LBP codes, levels,
+// combination). Returns the voxels done (a multiple of 8); the caller finishes the row.
+__attribute__((target("avx2"))) std::size_t codes_row_avx2(const float* p, const std::ptrdiff_t* off, std::size_t n,
+                                                           const std::uint16_t* rises, std::size_t nr,
+                                                           std::uint16_t bins, std::uint16_t* row) {
+  __m256i rise[16];
+  for (std::size_t k = 0; k < nr; ++k) rise[k] = _mm256_set1_epi32(rises[k]);
+  const __m256i zero = _mm256_setzero_si256(), one = _mm256_set1_epi32(1), nb = _mm256_set1_epi32(bins);
+  std::size_t x = 0;
+  for (; x + 8 <= n; x += 8) {
+    const __m256 c = _mm256_loadu_ps(p + x);
+    __m256i lbp = zero;
+    for (int k = 0; k < 6; ++k) {
+      const __m256 up = _mm256_cmp_ps(_mm256_loadu_ps(p + x + off[k]), c, _CMP_GE_OQ);
+      lbp = _mm256_or_si256(lbp, _mm256_and_si256(_mm256_castps_si256(up), _mm256_slli_epi32(one, k)));
+    }
+    const __m256i v = _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x)));
+    __m256i lvl = _mm256_andnot_si256(_mm256_cmpeq_epi32(v, zero), one);
+    for (std::size_t k = 0; k < nr; ++k) lvl = _mm256_sub_epi32(lvl, _mm256_cmpgt_epi32(v, rise[k]));  // -(-1)
+    const __m256i code = _mm256_add_epi32(_mm256_mullo_epi32(lbp, nb), lvl);  // < 64 * 64: fits 16 bits
+    const __m256i packed = _mm256_permute4x64_epi64(_mm256_packus_epi32(code, code), 0x08);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(row + x), _mm256_castsi256_si128(packed));
+  }
+  return x;
+}
+
 #endif
 
 std::atomic<bool> g_vector_texture{true};
@@ -346,6 +374,9 @@ TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads) {
   for (int v = 2; v <= ContrastQuantizer::kFine; ++v)
     for (int k = level[v - 1]; k < level[v]; ++k) rises.push_back(static_cast<std::uint16_t>(v - 1));
   const bool by_compares = rises.size() <= 16;
+#ifdef OCCSEG_TEXTURE_AVX2
+  const bool fused = by_compares && sten.present == 63 && use_avx2_kernel();
+#endif
   parallel_for(nz, threads, [&](std::size_t z0, std::size_t z1) {
     std::vector<std::uint8_t> lbp(nx);
     std::vector<std::uint16_t> lvl(nx);
@@ -354,8 +385,16 @@ TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads) {
         std::size_t x0 = 0, x1 = 0;
         if (!interior_row(d, y, z, x0, x1)) continue;
         std::uint16_t* row = codes + nx * (y + ny * z) + x0;
-        const std::size_t n = x1 - x0;
-        lbp_any<0>(p + nx * (y + ny * z) + x0, sten.off, n, lbp.data(), sten.present);
+        const float* prow = p + nx * (y + ny * z) + x0;
+        std::size_t n = x1 - x0;
+#ifdef OCCSEG_TEXTURE_AVX2
+        if (fused) {
+          const std::size_t done = codes_row_avx2(prow, sten.off, n, rises.data(), rises.size(),
+                                                  static_cast<std::uint16_t>(contrast_bins), row);
+          row += done, prow += done, n -= done;
+        }
+#endif
+        lbp_any<0>(prow, sten.off, n, lbp.data(), sten.present);
         if (by_compares) {
           levels_row(row, n, rises.data(), rises.size(), lvl.data());
         } else {
