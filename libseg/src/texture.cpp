@@ -155,19 +155,24 @@ __attribute__((target("avx2"))) void contrast_row_avx2(const float* p, const std
   const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), err = _mm256_set1_ps(1e-6f);
   const __m256 fine = _mm256_set1_ps(static_cast<float>(ContrastQuantizer::kFine));
   const __m256i top = _mm256_set1_epi32(ContrastQuantizer::kFine - 1), recheck = _mm256_set1_epi32(kRecheck);
-  const __m256i inc = _mm256_set1_epi32(1);
+  const __m256i inc = _mm256_set1_epi32(1), six = _mm256_set1_epi32(6);
+  // Offsets in locals: read through `off` they were reloaded every step (the stores to `out`
+  // might alias them).
+  const std::ptrdiff_t o[6] = {off[0], off[1], off[2], off[3], off[4], off[5]};
   std::size_t x = 0;
   for (; x + 8 <= n; x += 8) {
     const __m256 c = _mm256_loadu_ps(p + x);
-    __m256 s1 = zero, s0 = zero, n1 = zero, n0 = zero;
+    __m256 s1 = zero, s0 = zero;
+    __m256i up_count = _mm256_setzero_si256();  // neighbours >= centre; the other 6 - count are below
     for (int k = 0; k < 6; ++k) {
-      const __m256 v = _mm256_loadu_ps(p + x + off[k]);
+      const __m256 v = _mm256_loadu_ps(p + x + o[k]);
       const __m256 up = _mm256_cmp_ps(v, c, _CMP_GE_OQ);
       s1 = _mm256_add_ps(s1, _mm256_and_ps(up, v));
       s0 = _mm256_add_ps(s0, _mm256_andnot_ps(up, v));
-      n1 = _mm256_add_ps(n1, _mm256_and_ps(up, one));
-      n0 = _mm256_add_ps(n0, _mm256_andnot_ps(up, one));
+      up_count = _mm256_sub_epi32(up_count, _mm256_castps_si256(up));  // a true compare is -1
     }
+    // Small integers: the same floats as the masked sums of ones they replace.
+    const __m256 n1 = _mm256_cvtepi32_ps(up_count), n0 = _mm256_cvtepi32_ps(_mm256_sub_epi32(six, up_count));
     const __m256 has1 = _mm256_cmp_ps(n1, zero, _CMP_GT_OQ), has0 = _mm256_cmp_ps(n0, zero, _CMP_GT_OQ);
     const __m256 con = _mm256_sub_ps(_mm256_div_ps(s1, _mm256_blendv_ps(one, n1, has1)),
                                      _mm256_div_ps(s0, _mm256_blendv_ps(one, n0, has0)));
@@ -195,12 +200,13 @@ __attribute__((target("avx2"))) std::size_t codes_row_avx2(const float* p, const
   __m256i rise[16];
   for (std::size_t k = 0; k < nr; ++k) rise[k] = _mm256_set1_epi32(rises[k]);
   const __m256i zero = _mm256_setzero_si256(), one = _mm256_set1_epi32(1), nb = _mm256_set1_epi32(bins);
+  const std::ptrdiff_t o[6] = {off[0], off[1], off[2], off[3], off[4], off[5]};  // see contrast_row_avx2
   std::size_t x = 0;
   for (; x + 8 <= n; x += 8) {
     const __m256 c = _mm256_loadu_ps(p + x);
     __m256i lbp = zero;
     for (int k = 0; k < 6; ++k) {
-      const __m256 up = _mm256_cmp_ps(_mm256_loadu_ps(p + x + off[k]), c, _CMP_GE_OQ);
+      const __m256 up = _mm256_cmp_ps(_mm256_loadu_ps(p + x + o[k]), c, _CMP_GE_OQ);
       lbp = _mm256_or_si256(lbp, _mm256_and_si256(_mm256_castps_si256(up), _mm256_slli_epi32(one, k)));
     }
     const __m256i v = _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x)));
