@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "occseg/divide.hpp"
 #include "occseg/histogram.hpp"
 
@@ -80,4 +82,42 @@ TEST(Divide, SameLeavesForAnyThreadCount) {
   for (std::size_t i = 0; i < a.size(); ++i)
     for (int k = 0; k < 3; ++k) EXPECT_EQ(a[i].lo[k], b[i].lo[k]);
   EXPECT_EQ(compute_texture(g, 8, 4).codes, t.codes);
+}
+
+TEST(Divide, CountCodesMatchesOneByOneCounting) {
+  // Codes in runs: whole rows of one code (the eight-at-once path), rows with one voxel
+  // different at each position, kNoTexture runs and single kNoTexture voxels; blocks at every
+  // offset and width, so rows of 8 start anywhere and leave tails of 1..7.
+  const Dims d{37, 5, 4};
+  TextureMap t;
+  t.bins = 8;
+  t.codes.resize(d.count());
+  std::uint32_t s = 12345;
+  auto rnd = [&] { return s = s * 1103515245u + 12345u, (s >> 16) & 0x7FFF; };
+  for (std::size_t i = 0; i < t.codes.size();) {
+    const std::size_t run = 1 + rnd() % 20;
+    const std::uint16_t c = rnd() % 5 == 0 ? kNoTexture : static_cast<std::uint16_t>(rnd() % 512);
+    for (std::size_t k = 0; k < run && i < t.codes.size(); ++k, ++i) t.codes[i] = c;
+    if (rnd() % 3 == 0 && i < t.codes.size()) t.codes[i++] = static_cast<std::uint16_t>(rnd() % 512);
+  }
+  std::size_t checked = 0, uniform_rows = 0;
+  for (std::uint32_t x0 = 0; x0 < 12; ++x0)
+    for (std::uint32_t w = 1; x0 + w <= d.nx; w += 3) {
+      const Block b{{x0, 1, 0}, {x0 + w, 4, 4}};
+      std::vector<std::uint32_t> got(512, 7), want(512, 0);
+      count_codes(t, d, b, 512, got.data());
+      for (std::uint32_t z = b.lo[2]; z < b.hi[2]; ++z)
+        for (std::uint32_t y = b.lo[1]; y < b.hi[1]; ++y)
+          for (std::uint32_t x = b.lo[0]; x < b.hi[0]; ++x) {
+            const std::uint16_t c = t.codes[x + d.nx * (y + d.ny * z)];
+            if (c != kNoTexture) ++want[c];
+          }
+      ASSERT_EQ(got, want) << "block x " << x0 << " width " << w;
+      ++checked;
+    }
+  // The map really has rows of eight equal codes, with and without texture.
+  for (std::size_t i = 0; i + 8 <= t.codes.size(); ++i)
+    uniform_rows += std::all_of(t.codes.begin() + i, t.codes.begin() + i + 8, [&](auto c) { return c == t.codes[i]; });
+  EXPECT_GT(uniform_rows, 50u);
+  EXPECT_GT(checked, 100u);
 }

@@ -28,4 +28,8 @@ bool should_split(const std::vector<const std::uint32_t*>& histograms, std::size
 // (top blocks in x-fastest order, octants depth-first), whatever the thread count.
 std::vector<Block> divide(const Grid& grid, const TextureMap& texture, const Params& params);
 
+// Histogram of the texture codes of block b (h: `bins` counts, overwritten); kNoTexture voxels
+// are not counted. The division's own counting, exposed for unit tests.
+void count_codes(const TextureMap& texture, const Dims& dims, const Block& b, std::size_t bins, std::uint32_t* h);
+
 }  // namespace occseg
