@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <mutex>
 
 #include "occseg/error.hpp"
 #include "occseg/parallel.hpp"
@@ -55,6 +56,26 @@ inline std::size_t run_end(const std::uint8_t* s, std::size_t x, std::size_t nx)
   return find_first(s, s[x], false, x + 1, nx);
 }
 
+// End of the run of equal labels that starts at x in the label row `l` of length nx. After the
+// first pass a row's runs of one state are exactly its runs of one local label (a run is one
+// component; neighbours of another state are other components), so the statistics pass finds its
+// runs without the states.
+inline std::size_t label_run_end(const std::uint32_t* l, std::size_t x, std::size_t nx) {
+  const std::uint32_t v = l[x];
+  ++x;
+#ifdef __SSE2__
+  const __m128i vv = _mm_set1_epi32(static_cast<int>(v));
+  while (x + 4 <= nx) {
+    const auto m = static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(
+        _mm_cmpeq_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(l + x)), vv))));
+    if (m != 0xFu) return x + static_cast<std::size_t>(__builtin_ctz(~m & 0xFu));
+    x += 4;
+  }
+#endif
+  while (x < nx && l[x] == v) ++x;
+  return x;
+}
+
 // Unites a run of state v (label root `rs`) with every stretch of state v in row `other` over
 // [lo, hi), one union per stretch (the voxels of a stretch share one run): [lo, hi) is the run's
 // own extent for 6-connectivity, one voxel wider on both sides for 26.
@@ -83,7 +104,6 @@ constexpr std::uint8_t kOccupiedState = static_cast<std::uint8_t>(State::occupie
 
 struct SlotStats {  // one segment's share of one slab
   std::uint32_t id;
-  State state;
   std::uint64_t voxels = 0;
   double mop = 0;
   std::uint32_t lo[3], hi[3];
@@ -92,8 +112,12 @@ struct SlotStats {  // one segment's share of one slab
 
 }  // namespace
 
-void label_components(const std::vector<std::uint8_t>& st, const Grid& g, std::vector<std::uint32_t>& labels,
-                      std::vector<Segment>& segments, int threads, bool occupied26) {
+namespace {
+
+// label_components() on states `s`; `release`, when given, holds the states and is emptied as
+// soon as the components are known (before the statistics pass).
+void label_states(const std::uint8_t* s, std::vector<std::uint8_t>* release, const Grid& g,
+                  std::vector<std::uint32_t>& labels, std::vector<Segment>& segments, int threads, bool occupied26) {
   const std::size_t n = g.dims.count();
   if (n >= std::numeric_limits<std::uint32_t>::max())
     throw Error(Status::unsupported, "maps of " + std::to_string(n) +
@@ -102,12 +126,12 @@ void label_components(const std::vector<std::uint8_t>& st, const Grid& g, std::v
   const std::size_t slabs = (nz + kLabelSlab - 1) / kLabelSlab;
   resize_huge(labels, n);
   std::uint32_t* lab = labels.data();
-  const std::uint8_t* s = st.data();
   const float* p = g.p.data();
 
   // 1. Each slab on its own: runs along x, united with the rows before them in y and z (inside
   // the slab), then numbered 0..m-1 by first voxel; labels hold these local numbers.
   std::vector<std::uint32_t> local_count(slabs, 0);
+  std::vector<std::vector<std::uint8_t>> local_state(slabs);  // state of each local component
   for_each_slab(slabs, threads, [&](std::size_t sl) {
     const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab);
     for (std::size_t z = zb; z < ze; ++z)
@@ -143,6 +167,7 @@ void label_components(const std::vector<std::uint8_t>& st, const Grid& g, std::v
         const std::size_t e = run_end(s + i0, x, nx);
         const std::size_t rs = i0 + x;
         const std::uint32_t par = lab[rs];
+        if (par == rs) local_state[sl].push_back(s[rs]);
         const std::uint32_t id = par == rs ? m++ : lab[par];
         std::fill(lab + rs, lab + i0 + e, id);
         x = e;
@@ -191,15 +216,51 @@ void label_components(const std::vector<std::uint8_t>& st, const Grid& g, std::v
   }
   // Final ids in order of first voxel: a component's root precedes it.
   std::vector<std::uint32_t> final_id(base[slabs]);
-  std::uint32_t count = 0;
-  for (std::uint32_t k = 0; k < base[slabs]; ++k) {
-    const std::uint32_t r = find(parent.data(), k);
-    final_id[k] = r == k ? count++ : final_id[r];
+  std::vector<std::uint8_t> state_of;  // per final id
+  for (std::size_t sl = 0; sl < slabs; ++sl) {
+    for (std::uint32_t j = 0; j < local_count[sl]; ++j) {
+      const std::uint32_t k = base[sl] + j, r = find(parent.data(), k);
+      if (r == k) state_of.push_back(local_state[sl][j]);
+      final_id[k] = r == k ? static_cast<std::uint32_t>(state_of.size() - 1) : final_id[r];
+    }
+    local_state[sl] = std::vector<std::uint8_t>();
   }
+  const auto count = static_cast<std::uint32_t>(state_of.size());
+  parent = std::vector<std::uint32_t>();
+  // The states are not read again: a caller that handed them over gets their memory back now,
+  // before the statistics (1 byte per voxel less at the peak).
+  if (release) *release = std::vector<std::uint8_t>();
+  s = nullptr;
+
+  // The segment table, filled slab by slab in slab order below.
+  segments.assign(count, Segment());
+  std::vector<std::array<std::uint64_t, 3>> sums(count, {0, 0, 0});
+  for (std::uint32_t k = 0; k < count; ++k) {
+    segments[k].id = k;
+    segments[k].state = static_cast<State>(state_of[k]);
+    segments[k].bbox_min.fill(std::numeric_limits<std::uint32_t>::max());
+  }
+  auto merge = [&](const std::vector<SlotStats>& slab) {
+    for (const SlotStats& t : slab) {
+      Segment& seg = segments[t.id];
+      seg.voxels += t.voxels;
+      seg.mop += t.mop;
+      for (int a = 0; a < 3; ++a) {
+        seg.bbox_min[a] = std::min(seg.bbox_min[a], t.lo[a]);
+        seg.bbox_max[a] = std::max(seg.bbox_max[a], t.hi[a]);
+        sums[t.id][a] += t.sum[a];
+      }
+    }
+  };
 
   // 3. Final labels and per-slab statistics: each slab sums its voxels of every segment in scan
-  // order, into one slot per segment present in the slab.
+  // order, into one slot per segment present in the slab. Finished slabs are added to the table
+  // in slab order as soon as all slabs before them are (whoever finishes one merges what is
+  // ready), so only the few slabs waiting for an earlier one keep their slots.
   std::vector<std::vector<SlotStats>> slots(slabs);
+  std::vector<std::uint8_t> finished(slabs, 0);
+  std::size_t merged = 0;
+  std::mutex merge_mutex;
   for_each_slab(slabs, threads, [&](std::size_t sl) {
     const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab);
     // Slot of each local component: segments present in this slab, in order of first voxel.
@@ -224,9 +285,8 @@ void label_components(const std::vector<std::uint8_t>& st, const Grid& g, std::v
         const std::size_t i0 = nx * (y + ny * z);
         for (std::size_t x = 0; x < nx;) {
           const std::uint32_t l = lab[i0 + x];
-          const std::size_t e = run_end(s + i0, x, nx);  // a run: voxels of one component
+          const std::size_t e = label_run_end(lab + i0, x, nx);  // a run: voxels of one component
           SlotStats& t = out[slot[l]];
-          t.state = static_cast<State>(s[i0 + x]);
           std::fill(lab + i0 + x, lab + i0 + e, ids[l]);
           double acc = t.mop;
           for (std::size_t k = x; k < e; ++k) acc += p[i0 + k];  // scan order within the slab
@@ -245,27 +305,15 @@ void label_components(const std::vector<std::uint8_t>& st, const Grid& g, std::v
           x = e;
         }
       }
+    std::lock_guard<std::mutex> lock(merge_mutex);
+    finished[sl] = 1;
+    for (; merged < slabs && finished[merged]; ++merged) {
+      merge(slots[merged]);
+      slots[merged] = std::vector<SlotStats>();
+    }
   });
 
-  // 4. The segment table: slab shares added in slab order.
-  segments.assign(count, Segment());
-  std::vector<std::array<std::uint64_t, 3>> sums(count, {0, 0, 0});
-  for (std::uint32_t k = 0; k < count; ++k) {
-    segments[k].id = k;
-    segments[k].bbox_min.fill(std::numeric_limits<std::uint32_t>::max());
-  }
-  for (std::size_t sl = 0; sl < slabs; ++sl)
-    for (const SlotStats& t : slots[sl]) {
-      Segment& seg = segments[t.id];
-      seg.state = t.state;
-      seg.voxels += t.voxels;
-      seg.mop += t.mop;
-      for (int a = 0; a < 3; ++a) {
-        seg.bbox_min[a] = std::min(seg.bbox_min[a], t.lo[a]);
-        seg.bbox_max[a] = std::max(seg.bbox_max[a], t.hi[a]);
-        sums[t.id][a] += t.sum[a];
-      }
-    }
+  // 4. Means and centroids.
   for (std::uint32_t k = 0; k < count; ++k) {
     Segment& seg = segments[k];
     const double v = static_cast<double>(seg.voxels);
@@ -273,6 +321,18 @@ void label_components(const std::vector<std::uint8_t>& st, const Grid& g, std::v
     // Integer coordinate sums are exact; the double sum they replace was exact below 2^53.
     for (int a = 0; a < 3; ++a) seg.centroid[a] = static_cast<double>(sums[k][a]) / v;
   }
+}
+
+}  // namespace
+
+void label_components(const std::vector<std::uint8_t>& states, const Grid& grid, std::vector<std::uint32_t>& labels,
+                      std::vector<Segment>& segments, int threads, bool occupied26) {
+  label_states(states.data(), nullptr, grid, labels, segments, threads, occupied26);
+}
+
+void label_components(std::vector<std::uint8_t>&& states, const Grid& grid, std::vector<std::uint32_t>& labels,
+                      std::vector<Segment>& segments, int threads, bool occupied26) {
+  label_states(states.data(), &states, grid, labels, segments, threads, occupied26);
 }
 
 }  // namespace occseg

@@ -123,8 +123,9 @@ Result segment(const Grid& grid, const Params& params, bool keep_stages) {
   }
   release_freed_memory();
   st.begin("labelling");
-  label_components(states, grid, r.labels, r.segments, params.threads, params.occupied_connectivity == 26);
-  states = std::vector<std::uint8_t>();
+  // The states go in: they are freed inside, before the segment statistics.
+  label_components(std::move(states), grid, r.labels, r.segments, params.threads,
+                   params.occupied_connectivity == 26);
   // Part of "labelling" for callers: it decides which connected regions are separate objects.
   if (params.preset == Preset::default_preset && params.support_plane > 0)
     split_support_planes(grid, r.labels, r.segments, static_cast<std::size_t>(params.support_plane),

@@ -1,5 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "occseg/components.hpp"
 
 using namespace occseg;
@@ -76,5 +79,109 @@ TEST(Components, SlopedShellAcrossSlabsIsOneSegment) {
     EXPECT_EQ(segs[labels[g.index(19, 19, 19)]].voxels, 20u);
     label_components(st, g, labels, segs, threads, false);
     EXPECT_EQ(segs.size(), 21u);
+  }
+}
+
+// Random three-state maps with runs of 1..20 voxels (the statistics pass finds runs by label,
+// 4 at a time), sizes not multiples of the slab or vector widths, 6- and 26-connectivity, 1 and
+// 3 threads: every segment's table entry equals what its labelled voxels give, and the overload
+// that takes the states over gives the same labels and table and leaves the states empty.
+TEST(Components, StatisticsMatchTheLabelledVoxelsAndTakingStatesOverChangesNothing) {
+  const Dims d{37, 23, 19};
+  Grid g(d, 0.5f);
+  std::vector<std::uint8_t> st(d.count());
+  std::uint32_t r = 99;
+  auto rnd = [&] { return r = r * 1664525u + 1013904223u, r >> 8; };
+  for (std::size_t i = 0; i < st.size();) {
+    const std::size_t run = 1 + rnd() % 20;
+    const auto v = static_cast<std::uint8_t>(rnd() % 3);
+    for (std::size_t k = 0; k < run && i < st.size(); ++k, ++i) st[i] = v;
+  }
+  for (std::size_t i = 0; i < st.size(); ++i) g.p[i] = 0.05f + 0.3f * st[i] + 0.001f * float(i % 7);
+  for (bool occ26 : {false, true})
+    for (int threads : {1, 3}) {
+      std::vector<std::uint32_t> labels, labels2;
+      std::vector<Segment> segs, segs2;
+      label_components(st, g, labels, segs, threads, occ26);
+      std::vector<std::uint8_t> copy = st;
+      label_components(std::move(copy), g, labels2, segs2, threads, occ26);
+      EXPECT_TRUE(copy.empty());
+      ASSERT_EQ(labels, labels2);
+      ASSERT_EQ(segs.size(), segs2.size());
+      ASSERT_GT(segs.size(), 100u);
+      std::vector<std::uint64_t> n(segs.size(), 0);
+      std::vector<std::array<double, 3>> sum(segs.size(), {0, 0, 0});
+      std::vector<std::array<std::uint32_t, 3>> lo(segs.size(), {~0u, ~0u, ~0u}), hi(segs.size(), {0, 0, 0});
+      std::vector<double> mop(segs.size(), 0.0);
+      for (std::size_t i = 0; i < st.size(); ++i) {
+        const std::uint32_t l = labels[i];
+        ASSERT_LT(l, segs.size());
+        ASSERT_EQ(static_cast<std::uint8_t>(segs[l].state), st[i]) << "voxel " << i;
+        const std::uint32_t c[3] = {static_cast<std::uint32_t>(i % d.nx), static_cast<std::uint32_t>(i / d.nx % d.ny),
+                                    static_cast<std::uint32_t>(i / (d.nx * d.ny))};
+        ++n[l];
+        mop[l] += g.p[i];
+        for (int a = 0; a < 3; ++a) {
+          sum[l][a] += c[a];
+          lo[l][a] = std::min(lo[l][a], c[a]);
+          hi[l][a] = std::max(hi[l][a], c[a]);
+        }
+      }
+      for (std::size_t k = 0; k < segs.size(); ++k) {
+        const Segment &a = segs[k], &b = segs2[k];
+        EXPECT_EQ(a.id, k);
+        EXPECT_EQ(a.voxels, n[k]) << k;
+        EXPECT_EQ(a.bbox_min, lo[k]) << k;
+        EXPECT_EQ(a.bbox_max, hi[k]) << k;
+        for (int ax = 0; ax < 3; ++ax) EXPECT_DOUBLE_EQ(a.centroid[ax], sum[k][ax] / double(n[k])) << k;
+        EXPECT_NEAR(a.mop, mop[k] / double(n[k]), 1e-12) << k;
+        EXPECT_EQ(a.state, b.state);
+        EXPECT_EQ(a.voxels, b.voxels);
+        EXPECT_EQ(a.mop, b.mop);
+        EXPECT_EQ(a.bbox_min, b.bbox_min);
+        EXPECT_EQ(a.bbox_max, b.bbox_max);
+        EXPECT_EQ(a.centroid, b.centroid);
+      }
+    }
+}
+
+// The mean occupancy is summed per slab in scan order and the slab shares are added in slab
+// order, whichever thread finishes which slab first. Here slab 0 is expensive (random states,
+// many runs) and slabs 1..15 are one free region, so with two threads the later slabs finish
+// first. The free voxels' values span many binades (u^6 for random u), so the slab shares are
+// rounded sums; the values are drawn until adding slab 0's share last would change the sum.
+TEST(Components, SlabSharesAreAddedInSlabOrderWhateverFinishesFirst) {
+  const Dims d{64, 64, 16 * kLabelSlab};
+  Grid g(d, 0.5f);
+  std::vector<std::uint8_t> st(d.count(), 0);
+  std::uint32_t r = 7;
+  auto next = [&] { return r = r * 1664525u + 1013904223u; };
+  const std::size_t slab0 = d.nx * d.ny * kLabelSlab;
+  for (std::size_t i = 0; i < slab0; ++i) st[i] = static_cast<std::uint8_t>((next() >> 30) % 3);
+  std::vector<std::uint32_t> labels;
+  std::vector<Segment> segs;
+  label_components(st, g, labels, segs, 1, true);  // membership only: it does not depend on p
+  const std::uint32_t big = labels.back();         // the free region of slabs 1..15
+  double forward = 0;
+  std::uint64_t n = 0;
+  for (int draw = 0;; ++draw) {
+    ASSERT_LT(draw, 50) << "no order-sensitive values found";
+    for (std::size_t i = 0; i < st.size(); ++i)
+      g.p[i] = st[i] == 0 ? static_cast<float>(0.4 * std::pow((next() >> 8) / double(1u << 24), 6))
+                          : (st[i] == 1 ? 0.5f : 0.9f);
+    double share[16] = {};
+    n = 0;
+    for (std::size_t i = 0; i < st.size(); ++i)
+      if (labels[i] == big) share[i / slab0] += g.p[i], ++n;
+    double zero_last = 0;
+    forward = 0;
+    for (int s = 0; s < 16; ++s) forward += share[s];
+    for (int s = 1; s < 16; ++s) zero_last += share[s];
+    zero_last += share[0];
+    if (forward != zero_last && share[0] > 0) break;
+  }
+  for (int run = 0; run < 3; ++run) {
+    label_components(st, g, labels, segs, 2, true);
+    EXPECT_EQ(segs[big].mop, forward / double(n)) << "run " << run;
   }
 }

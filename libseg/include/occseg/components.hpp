@@ -32,5 +32,9 @@ constexpr std::size_t kLabelSlab = 8;
 void label_components(const std::vector<std::uint8_t>& states, const Grid& grid,
                       std::vector<std::uint32_t>& labels, std::vector<Segment>& segments, int threads = 0,
                       bool occupied26 = false);
+// The same, taking the states over: they are freed (left empty) as soon as the components are
+// known, before the statistics pass, which lowers the peak memory by 1 byte per voxel.
+void label_components(std::vector<std::uint8_t>&& states, const Grid& grid, std::vector<std::uint32_t>& labels,
+                      std::vector<Segment>& segments, int threads = 0, bool occupied26 = false);
 
 }  // namespace occseg
