@@ -178,8 +178,9 @@ bool start_walk(const double* a, const double* b, bool hit, const Dims& dims, Wa
 }
 
 // Marks the current voxel crossed and moves one voxel on; false when the walk is over (at_end
-// tells whether it stopped on its end voxel). The axis is chosen with compare masks, not branches (the choice is a coin
-// flip on oblique rays), and each tmax gets + tdelta or + 0.0, which leaves it unchanged.
+// tells whether it stopped on its end voxel). The axis is chosen with compare masks, not
+// branches (the choice is a coin flip on oblique rays), and each tmax gets + tdelta or + 0.0,
+// which leaves it unchanged.
 inline bool step(Walk& w, std::uint8_t* marks) {
   mark_crossed(marks + w.i);
   if (w.i == w.end) {

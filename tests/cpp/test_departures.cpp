@@ -80,7 +80,9 @@ TEST(Departures, UnknownRegionsMatchTheirDefinition) {
               wrong += m[g.index(std::size_t(x), std::size_t(y), std::size_t(z))] != (want ? 1 : 0);
             }
         EXPECT_EQ(wrong, 0u) << d.nx << "x" << d.ny << "x" << d.nz << " r " << r << " density " << density;
-        if (density == 97u && r == 1) EXPECT_GT(in, 0u) << "the test must see regions";
+        if (density == 97u && r == 1) {
+          EXPECT_GT(in, 0u) << "the test must see regions";
+        }
       }
 }
 
