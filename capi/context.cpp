@@ -24,4 +24,15 @@ void occseg_context_free(occseg_context* context) { delete context; }
 
 int occseg_context_threads(const occseg_context* context) { return context ? context->context.threads() : 0; }
 
+void occseg_context_recycle(occseg_context* context, occseg_result* result) {
+  if (context && result) {
+    try {
+      context->context.recycle(std::move(result->result));
+    } catch (...) {
+      // Only a mutex that cannot be locked could throw here: the array is then simply freed.
+    }
+  }
+  delete result;
+}
+
 }  // extern "C"

@@ -5,6 +5,7 @@ import ctypes
 from ._errors import OccsegError, Status, check
 from ._handles import Owned
 from ._lib import has, lib
+from ._result import Result
 
 
 class Context(Owned):
@@ -28,6 +29,21 @@ class Context(Owned):
     def threads(self):
         """Threads a call runs on, the calling thread included."""
         return int(lib.occseg_context_threads(self.handle))
+
+    def recycle(self, result):
+        """Hands back an occseg.Result you are done with: the next occseg.segment(...,
+        context=self) writes its labels into that result's C label array instead of allocating
+        fresh memory (about 5 % of a call on a 320 x 320 x 128 map). `result` is closed: its
+        labels, segments and timings stay usable (they are Python copies), states() and write()
+        do not. A closed result is ignored."""
+        if not has("occseg_context_recycle"):
+            raise OccsegError(Status.EUNSUPPORTED, "occseg.Context.recycle: the loaded liboccseg has no occseg_context_recycle")
+        if not isinstance(result, Result):
+            raise OccsegError(Status.EINVAL, f"occseg.Context.recycle: expected an occseg.Result, not {type(result).__name__}")
+        context = self.handle  # ValueError if this context is closed, before the result is touched
+        handle = result._detach()
+        if handle is not None:
+            lib.occseg_context_recycle(context, handle)
 
     def __repr__(self):
         return "<occseg.Context closed>" if self.closed else f"<occseg.Context threads={self.threads}>"

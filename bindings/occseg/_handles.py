@@ -39,7 +39,16 @@ class Owned:
 
     def _own(self, handle, kind, free):
         self._handle = handle.value if hasattr(handle, "value") else int(handle)
+        self._kind = kind
         self._finalizer = own(self, kind, free, self._handle)
+
+    def _detach(self):
+        """Gives up the C handle without freeing it (another owner frees it now); None if the
+        object is already closed."""
+        if self._finalizer.detach() is None:
+            return None
+        _count(self._kind, -1)
+        return self._handle
 
     @property
     def handle(self):

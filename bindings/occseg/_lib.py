@@ -95,6 +95,7 @@ OPTIONAL_PROTOTYPES = {
     "occseg_context_free": (None, [_P]),
     "occseg_context_threads": (_I, [_P]),
     "occseg_context_segment": (_I, [ctypes.POINTER(_P), _P, _P, _P]),
+    "occseg_context_recycle": (None, [_P, _P]),
     "occseg_plugins_load": (_I, [_S]),
     "occseg_plugins_load_default": (_I, [_PU32]),
     "occseg_plugin_search_path": (_I, [ctypes.c_char_p, ctypes.c_size_t, ctypes.POINTER(ctypes.c_size_t)]),

@@ -13,6 +13,7 @@
 #include "occseg/error.hpp"
 #include "occseg/parallel.hpp"
 #include "parallel_pool.hpp"
+#include "segment_internal.hpp"
 
 namespace occseg {
 
@@ -28,6 +29,8 @@ struct Context::Pool {
   std::uint64_t generation = 0;
   bool stop = false;
   std::exception_ptr first;
+  std::mutex spare_mutex;
+  std::vector<std::uint32_t> spare_labels;  // from recycle(), for the next segment()
 
   void work(std::size_t k) {
     std::uint64_t seen = 0;
@@ -102,6 +105,13 @@ Context::~Context() {
 
 int Context::threads() const { return static_cast<int>(pool_->workers.size()) + 1; }
 
+void Context::recycle(Result&& result) {
+  std::vector<std::uint32_t> labels = std::move(result.labels);
+  result = Result();
+  std::lock_guard<std::mutex> lock(pool_->spare_mutex);
+  pool_->spare_labels.swap(labels);  // the older array, if any, is freed outside the lock
+}
+
 void Context::parallel_for(std::size_t n, const std::function<void(std::size_t, std::size_t)>& fn) {
   run_on_pool(this, n, threads(), fn);
 }
@@ -125,8 +135,13 @@ void run_on_pool(Context* context, std::size_t n, int threads,
 }
 
 Result segment(Context& context, const Grid& grid, const Params& params, bool keep_stages) {
+  std::vector<std::uint32_t> labels;
+  {
+    std::lock_guard<std::mutex> lock(context.pool_->spare_mutex);
+    labels.swap(context.pool_->spare_labels);
+  }
   Result r;
-  context.run([&] { r = segment(grid, params, keep_stages); });
+  context.run([&] { r = segment_into(grid, params, keep_stages, std::move(labels)); });
   return r;
 }
 

@@ -17,6 +17,7 @@
 #include "occseg/refine.hpp"
 #include "occseg/registry.hpp"
 #include "occseg/texture.hpp"
+#include "segment_internal.hpp"
 
 namespace occseg {
 
@@ -96,10 +97,18 @@ void check_map(const Grid& grid, int threads) {
 }  // namespace
 
 Result segment(const Grid& grid, const Params& params, bool keep_stages) {
+  return segment_into(grid, params, keep_stages, std::vector<std::uint32_t>());
+}
+
+Result segment_into(const Grid& grid, const Params& params, bool keep_stages, std::vector<std::uint32_t>&& labels) {
   params.validate();
   check_map(grid, params.threads);
   Result r;
   r.dims = grid.dims;
+  // label_components() keeps the storage when it is large enough (a recycled array); a smaller
+  // one would only be copied into fresh storage.
+  if (labels.capacity() < grid.dims.count()) labels = std::vector<std::uint32_t>();
+  r.labels = std::move(labels);
   Stages st(params, r);
 
   st.begin("texture");

@@ -113,6 +113,34 @@ TEST(Context, SegmentAndFusionGiveTheSameResults) {
   EXPECT_NE(std::count(a.log_odds().begin(), a.log_odds().end(), 0.0f), static_cast<long>(a.log_odds().size()));
 }
 
+// A recycled result's label array is the next call's (same storage, no fresh memory), written
+// over completely; a map with more voxels than it holds gets fresh storage; results always
+// equal the plain call's.
+TEST(Context, RecycledLabelArrayIsReusedAndRewritten) {
+  Context ctx(2);
+  const Grid a = test::random_map(Dims{37, 29, 21}, 3, 0.3), b = test::random_map(Dims{37, 29, 21}, 4, 0.3);
+  const Grid small = test::random_map(Dims{20, 9, 5}, 5, 0.3), big = test::random_map(Dims{37, 29, 22}, 6, 0.3);
+  Result r = segment(ctx, a);
+  expect_same(r, segment(a));
+  const std::uint32_t* storage = r.labels.data();
+  ctx.recycle(std::move(r));
+  EXPECT_TRUE(r.labels.empty());
+  EXPECT_TRUE(r.segments.empty());
+  Result s = segment(ctx, b);
+  EXPECT_EQ(s.labels.data(), storage);
+  expect_same(s, segment(b));
+  ctx.recycle(std::move(s));
+  Result t = segment(ctx, small);  // fewer voxels: the same storage
+  EXPECT_EQ(t.labels.data(), storage);
+  expect_same(t, segment(small));
+  ctx.recycle(std::move(t));
+  Result u = segment(ctx, big);  // more voxels than it holds: fresh storage
+  expect_same(u, segment(big));
+  Result v = segment(ctx, a);  // nothing recycled since: fresh storage too
+  EXPECT_NE(v.labels.data(), u.labels.data());
+  expect_same(v, segment(a));
+}
+
 TEST(Context, ExceptionsNestingAndBadCounts) {
   Context ctx(2);
   EXPECT_THROW(ctx.parallel_for(10, [](std::size_t b, std::size_t) {

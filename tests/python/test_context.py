@@ -57,3 +57,30 @@ def test_bad_arguments_are_named():
         occseg.Context(1.5)
     with pytest.raises(occseg.OccsegError, match="context must be an occseg.Context"):
         occseg.segment(scene(), context="pool")
+
+
+def test_recycled_result_is_closed_its_data_kept_and_later_results_right():
+    m, flat = scene(), np.full((24, 40, 36), 0.1, np.float32)
+    plain = occseg.segment(m)
+    gc.collect()
+    before = occseg.live_handles().get("result", 0)
+    with occseg.Context(2) as ctx:
+        r = occseg.segment(m, context=ctx)
+        labels = r.labels
+        ctx.recycle(r)
+        assert r.closed
+        assert occseg.live_handles().get("result", 0) == before  # handed over, not leaked
+        assert np.array_equal(r.labels, plain.labels) and r.labels is labels  # Python copies stay
+        with pytest.raises(ValueError):
+            r.states()
+        ctx.recycle(r)  # already closed: ignored
+        f = occseg.segment(flat, context=ctx)  # writes into the recycled array
+        assert len(f.segments) == 1 and not f.labels.any()
+        ctx.recycle(f)
+        again = occseg.segment(m, context=ctx)
+        assert np.array_equal(again.labels, plain.labels)
+        with pytest.raises(occseg.OccsegError, match="expected an occseg.Result"):
+            ctx.recycle(labels)
+    with pytest.raises(ValueError):
+        ctx.recycle(again)  # closed context: the result is left alone
+    assert not again.closed

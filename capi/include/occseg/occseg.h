@@ -274,6 +274,15 @@ OCCSEG_API int occseg_context_threads(const occseg_context *context);
 OCCSEG_API int occseg_context_segment(occseg_result **out, occseg_context *context, const occseg_map *map,
                                       const occseg_params *params);
 
+/* Frees `result` as occseg_result_free() does, but keeps its label array in `context`: the next
+ * occseg_context_segment() on the context writes its labels there instead of allocating,
+ * zero-filling and paging in 4 bytes per voxel of fresh memory (about 5 % of a call on a
+ * 320 x 320 x 128 map). The context keeps one array, the last one handed back, until a call
+ * takes it (a map with more voxels than it holds gets fresh memory) or occseg_context_free().
+ * A NULL context just frees the result; a NULL result is a no-op. Accessors must not be used on
+ * `result` afterwards. */
+OCCSEG_API void occseg_context_recycle(occseg_context *context, occseg_result *result);
+
 /* ========================================================================================== */
 /*  Results                                                                                   */
 /* ========================================================================================== */
