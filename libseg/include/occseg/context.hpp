@@ -28,7 +28,8 @@ class Context {
   // paging in 4 bytes per voxel of fresh memory (about 5 % of a call on a 320 x 320 x 128 map,
   // docs/performance.md). `result` is left empty. The context keeps one array, the last one
   // handed back, until a call takes it (a map with more voxels than it holds gets fresh memory)
-  // or the context is destroyed.
+  // or the context is destroyed. The array is alive through that whole call, so its peak memory
+  // is about 7.5 bytes per voxel beyond the map instead of 5.2: speed for memory, by choice.
   void recycle(Result&& result);
 
   // parallel_for over this context's threads (same chunks as the free parallel_for with the
