@@ -110,10 +110,6 @@ struct SlotStats {  // one segment's share of one slab
   std::uint64_t sum[3] = {0, 0, 0};
 };
 
-}  // namespace
-
-namespace {
-
 // label_components() on states `s`; `release`, when given, holds the states and is emptied as
 // soon as the components are known (before the statistics pass).
 void label_states(const std::uint8_t* s, std::vector<std::uint8_t>* release, const Grid& g,

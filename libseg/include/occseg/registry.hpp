@@ -26,7 +26,9 @@ struct TextureOperator {
   std::string name, description, plugin;
   occseg_plugin_texture_fn compute = nullptr;
   void* user = nullptr;
-  // Built-in operators only: a direct C++ implementation the pipeline prefers (no copy).
+  // Built-in operators only: a direct C++ implementation the pipeline prefers (no copy). It must
+  // reject values outside [0, 1] itself, as compute_texture() does: segment() leaves the value
+  // check to an operator that has one, and checks the map first for the others.
   TextureMap (*native)(const Grid& grid, const Params& params) = nullptr;
 };
 
