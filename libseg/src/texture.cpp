@@ -211,20 +211,23 @@ __attribute__((target("avx2"))) std::size_t codes_row_avx2(const float* p, const
                                                            std::uint16_t bins, std::uint16_t* row) {
   __m256i rise[16];
   for (std::size_t k = 0; k < nr; ++k) rise[k] = _mm256_set1_epi32(rises[k]);
-  const __m256i zero = _mm256_setzero_si256(), one = _mm256_set1_epi32(1), nb = _mm256_set1_epi32(bins);
+  const __m256i zero = _mm256_setzero_si256(), one = _mm256_set1_epi32(1);
+  // Bit k of the LBP code weighs bins << k: the code comes out multiplied by bins (no multiply).
+  __m256i weight[6];
+  for (int k = 0; k < 6; ++k) weight[k] = _mm256_set1_epi32(bins << k);
   const std::ptrdiff_t o[6] = {off[0], off[1], off[2], off[3], off[4], off[5]};  // see contrast_row_avx2
   std::size_t x = 0;
   for (; x + 8 <= n; x += 8) {
     const __m256 c = _mm256_loadu_ps(p + x);
-    __m256i lbp = zero;
+    __m256i lbp_bins = zero;  // lbp * bins
     for (int k = 0; k < 6; ++k) {
       const __m256 up = _mm256_cmp_ps(_mm256_loadu_ps(p + x + o[k]), c, _CMP_GE_OQ);
-      lbp = _mm256_or_si256(lbp, _mm256_and_si256(_mm256_castps_si256(up), _mm256_slli_epi32(one, k)));
+      lbp_bins = _mm256_or_si256(lbp_bins, _mm256_and_si256(_mm256_castps_si256(up), weight[k]));
     }
     const __m256i v = _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x)));
     __m256i lvl = _mm256_andnot_si256(_mm256_cmpeq_epi32(v, zero), one);
     for (std::size_t k = 0; k < nr; ++k) lvl = _mm256_sub_epi32(lvl, _mm256_cmpgt_epi32(v, rise[k]));  // -(-1)
-    const __m256i code = _mm256_add_epi32(_mm256_mullo_epi32(lbp, nb), lvl);  // < 64 * 64: fits 16 bits
+    const __m256i code = _mm256_add_epi32(lbp_bins, lvl);  // < 64 * 64: fits 16 bits
     const __m256i packed = _mm256_permute4x64_epi64(_mm256_packus_epi32(code, code), 0x08);
     _mm_storeu_si128(reinterpret_cast<__m128i*>(row + x), _mm256_castsi256_si128(packed));
   }
@@ -359,6 +362,11 @@ void lbp_any(const float* p, const std::ptrdiff_t* off, std::size_t n, std::uint
   }
 }
 
+// Asks for [p, p + bytes) in L2: the rows two planes ahead, while this plane is computed.
+void prefetch_row(const void* p, std::size_t bytes) {
+  for (std::size_t b = 0; b < bytes; b += 64) __builtin_prefetch(static_cast<const char*>(p) + b, 0, 2);
+}
+
 // Interior voxels of row (y, z): [x0, x1) along x. Returns false for rows on an outer face.
 bool interior_row(const Dims& d, std::size_t y, std::size_t z, std::size_t& x0, std::size_t& x1) {
   const bool fx = d.nx == 1, fy = d.ny == 1, fz = d.nz == 1;
@@ -415,6 +423,9 @@ TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads) {
       for (std::size_t z = z0; ok && z < z1; ++z) {
         if (z + 1 < nz && !(ok = plane_ok(z + 1))) break;
         for (std::size_t y = 0; y < ny; ++y) {
+          // Plane z + 2 is fetched from memory into L2 while plane z is computed, so that the check
+          // of plane z + 1 (above) does not stream from memory with nothing computed meanwhile.
+          if (z + 2 < nz) prefetch_row(p + nx * (y + ny * (z + 2)), nx * sizeof(float));
           std::uint16_t* row = codes + nx * (y + ny * z);
           std::size_t x0 = 0, x1 = 0;
           if (!interior_row(d, y, z, x0, x1)) {
@@ -463,6 +474,7 @@ TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads) {
     std::vector<std::uint16_t> lvl(nx);
     for (std::size_t z = z0; z < z1; ++z)
       for (std::size_t y = 0; y < ny; ++y) {
+        if (z + 2 < nz) prefetch_row(p + nx * (y + ny * (z + 2)), nx * sizeof(float));
         std::size_t x0 = 0, x1 = 0;
         if (!interior_row(d, y, z, x0, x1)) continue;
         std::uint16_t* row = codes + nx * (y + ny * z) + x0;
