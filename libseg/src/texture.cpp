@@ -212,7 +212,8 @@ __attribute__((target("avx2"))) std::size_t codes_row_avx2(const float* p, const
   __m256i rise[16];
   for (std::size_t k = 0; k < nr; ++k) rise[k] = _mm256_set1_epi32(rises[k]);
   const __m256i zero = _mm256_setzero_si256(), one = _mm256_set1_epi32(1);
-  // Bit k of the LBP code weighs bins << k: the code comes out multiplied by bins (no multiply).
+  // Bit k of the LBP code weighs bins << k, and the weights are added: the code comes out
+  // multiplied by bins (no multiply).
   __m256i weight[6];
   for (int k = 0; k < 6; ++k) weight[k] = _mm256_set1_epi32(bins << k);
   const std::ptrdiff_t o[6] = {off[0], off[1], off[2], off[3], off[4], off[5]};  // see contrast_row_avx2
@@ -222,7 +223,7 @@ __attribute__((target("avx2"))) std::size_t codes_row_avx2(const float* p, const
     __m256i lbp_bins = zero;  // lbp * bins
     for (int k = 0; k < 6; ++k) {
       const __m256 up = _mm256_cmp_ps(_mm256_loadu_ps(p + x + o[k]), c, _CMP_GE_OQ);
-      lbp_bins = _mm256_or_si256(lbp_bins, _mm256_and_si256(_mm256_castps_si256(up), weight[k]));
+      lbp_bins = _mm256_add_epi32(lbp_bins, _mm256_and_si256(_mm256_castps_si256(up), weight[k]));  // add: bins may not be a power of 2
     }
     const __m256i v = _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x)));
     __m256i lvl = _mm256_andnot_si256(_mm256_cmpeq_epi32(v, zero), one);
