@@ -32,26 +32,42 @@ bool should_split(const std::vector<const std::uint32_t*>& h, std::size_t bins, 
 
 void count_codes(const TextureMap& texture, const Dims& dims, const Block& b, std::size_t bins, std::uint32_t* h) {
   std::fill(h, h + bins, 0u);
+  // Rows that are not uniform count their voxels into three interleaved histograms (x mod 3):
+  // such a row is mostly one code with a few others, and one histogram chained the increments
+  // of that code (each waiting for the previous store). The two extra histograms live per thread
+  // and are added and cleared only when a row used them.
+  thread_local std::vector<std::uint32_t> extra;
+  if (extra.size() < 2 * bins) extra.assign(2 * bins, 0u);
+  std::uint32_t* const h1 = extra.data();
+  std::uint32_t* const h2 = h1 + bins;
+  bool used = false;
   const std::size_t nx = dims.nx, ny = dims.ny;
   for (std::uint32_t z = b.lo[2]; z < b.hi[2]; ++z)
     for (std::uint32_t y = b.lo[1]; y < b.hi[1]; ++y) {
       const std::uint16_t* row = texture.codes.data() + nx * (y + ny * z);
       std::uint32_t x = b.lo[0];
 #ifdef __SSE2__
-      // Eight equal codes (uniform texture: most rows of most maps) in one add: one at a time,
-      // they would chain eight increments through one counter.
+      // Eight equal codes (uniform texture: most rows of most maps) in one add.
       for (; x + 8 <= b.hi[0]; x += 8) {
         const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x));
         if (_mm_movemask_epi8(_mm_cmpeq_epi16(v, _mm_set1_epi16(static_cast<short>(row[x])))) == 0xFFFF) {
           if (row[x] != kNoTexture) h[row[x]] += 8;
           continue;
         }
-        for (std::uint32_t k = x; k < x + 8; ++k)
-          if (row[k] != kNoTexture) ++h[row[k]];
+        used = true;
+        const std::uint16_t* r = row + x;
+        std::uint32_t* const bank[3] = {h, h1, h2};
+        for (int k = 0; k < 8; ++k)
+          if (r[k] != kNoTexture) ++bank[k % 3][r[k]];
       }
 #endif
       for (; x < b.hi[0]; ++x)
         if (row[x] != kNoTexture) ++h[row[x]];
+    }
+  if (used)
+    for (std::size_t i = 0; i < bins; ++i) {
+      h[i] += h1[i] + h2[i];
+      h1[i] = h2[i] = 0;
     }
 }
 
