@@ -132,11 +132,6 @@ void unpack_half(const std::uint64_t* bits, const std::uint8_t* own, std::size_t
   for (; x < nx; ++x) out[x] = static_cast<std::uint8_t>(((bits[x / 64] >> (x % 64)) & 1) & (own[x] == kUnknown));
 }
 
-__attribute__((target_clones("avx2", "default")))
-void half_mask(const std::uint8_t* own, std::uint8_t* m, std::size_t n) {
-  for (std::size_t i = 0; i < n; ++i) m[i] = own[i] == kUnknown;
-}
-
 // The per-voxel rules on one row of voxels (x in [0, n)); xm/xp, ym/yp, zm/zp are the own states
 // of the neighbours, with `none` (all free) rows standing in outside the map.
 inline std::uint8_t rule(std::uint8_t s, std::uint8_t o, std::uint8_t region, bool touches) {
@@ -178,29 +173,39 @@ bool rules_row(std::uint8_t* __restrict st, const std::uint8_t* __restrict own, 
 
 }  // namespace
 
-std::vector<std::uint8_t> unknown_regions(const std::vector<std::uint8_t>& own, const Dims& d, const Params& params) {
-  std::vector<std::uint8_t> m;
-  resize_huge(m, own.size());
-  const int r = params.gap_radius;
-  if (r <= 0) {  // no opening: every 0.5 voxel is in a region
-    const std::size_t chunk = 1 << 16;
-    parallel_for((m.size() + chunk - 1) / chunk, params.threads, [&](std::size_t c0, std::size_t c1) {
-      const std::size_t b = c0 * chunk, e = std::min(m.size(), c1 * chunk);
-      half_mask(own.data() + b, m.data() + b, e - b);
-    });
-    return m;
-  }
-  // Opening = erosion then dilation, each separable into three axis passes (ping-pong bit masks).
+namespace {
+
+// Rule 2's regions as a bit mask (a row of bits per row of voxels; bit set: the voxel is at 0.5
+// and in a region). apply_voxel_rules() reads it row by row; the byte mask of unknown_regions()
+// is made from it only when asked for: allocating, zero-filling and writing 13 MB of bytes, and
+// reading them back, cost more than the opening itself.
+BitMask region_bits(const std::vector<std::uint8_t>& own, const Dims& d, const Params& params) {
   const std::size_t nx = d.nx, rows = d.ny * d.nz;
-  BitMask a(nx, rows), b(nx, rows);
+  BitMask a(nx, rows);
   parallel_for_dynamic(rows, params.threads, [&](std::size_t r0, std::size_t r1) {
     for (std::size_t rw = r0; rw < r1; ++rw) pack_half(own.data() + rw * nx, nx, a.row(rw));
   });
+  const int r = params.gap_radius;
+  if (r <= 0) return a;  // no opening: every 0.5 voxel is in a region
+  // Opening = erosion then dilation, each separable into three axis passes (ping-pong bit masks).
+  BitMask b(nx, rows);
   for (int pass = 0; pass < 6; ++pass) {
     bit_box_pass(a, b, d, pass % 3, r, pass < 3, params.threads);
     std::swap(a, b);
   }
-  parallel_for_dynamic(rows, params.threads, [&](std::size_t r0, std::size_t r1) {
+  return a;
+}
+
+inline bool bit(const BitMask& m, std::size_t row, std::size_t x) { return (m.row(row)[x / 64] >> (x % 64)) & 1u; }
+
+}  // namespace
+
+std::vector<std::uint8_t> unknown_regions(const std::vector<std::uint8_t>& own, const Dims& d, const Params& params) {
+  const BitMask a = region_bits(own, d, params);
+  std::vector<std::uint8_t> m;
+  resize_huge(m, own.size());
+  const std::size_t nx = d.nx;
+  parallel_for_dynamic(a.rows, params.threads, [&](std::size_t r0, std::size_t r1) {
     for (std::size_t rw = r0; rw < r1; ++rw) unpack_half(a.row(rw), own.data() + rw * nx, nx, m.data() + rw * nx);
   });
   return m;
@@ -215,9 +220,9 @@ namespace {
 // that touch an occupied voxel), in any order: the result is a set (connected components), so it
 // does not depend on visiting order.
 void flood_gaps_from_objects(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own,
-                             const std::vector<std::uint8_t>& region, const Dims& d, std::vector<std::size_t>& queue) {
+                             const BitMask& region, const Dims& d, std::vector<std::size_t>& queue) {
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, sz = nx * ny;
-  auto gap = [&](std::size_t i) { return own[i] == kUnknown && !region[i]; };
+  auto gap = [&](std::size_t i) { return own[i] == kUnknown && !bit(region, i / nx, i % nx); };
   while (!queue.empty()) {
     const std::size_t i = queue.back();
     queue.pop_back();
@@ -241,7 +246,7 @@ void flood_gaps_from_objects(std::vector<std::uint8_t>& st, const std::vector<st
 
 void apply_voxel_rules(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
                        const Params& params) {
-  const std::vector<std::uint8_t> region = unknown_regions(own, d, params);
+  const BitMask region = region_bits(own, d, params);
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, sz = nx * ny;
   const std::vector<std::uint8_t> none(nx, kFree);  // outside the map: no occupied neighbour
   // Reads only own states and each voxel's own entry of st, so rows are independent. Rows that
@@ -250,17 +255,19 @@ void apply_voxel_rules(std::vector<std::uint8_t>& st, const std::vector<std::uin
   std::mutex seeds_mutex;
   parallel_for_dynamic(nz, params.threads, [&](std::size_t z0, std::size_t z1) {
     std::vector<std::size_t> mine;
+    std::vector<std::uint8_t> reg(nx);  // this row's region bits as bytes
     for (std::size_t z = z0; z < z1; ++z)
       for (std::size_t y = 0; y < ny; ++y) {
         const std::size_t i = nx * (y + ny * z);
         const std::uint8_t* o = own.data() + i;
-        if (!rules_row(st.data() + i, o, region.data() + i, y > 0 ? o - nx : none.data(),
+        unpack_half(region.row(y + ny * z), o, nx, reg.data());
+        if (!rules_row(st.data() + i, o, reg.data(), y > 0 ? o - nx : none.data(),
                        y + 1 < ny ? o + nx : none.data(), z > 0 ? o - sz : none.data(),
                        z + 1 < nz ? o + sz : none.data(), nx))
           continue;
         for (std::size_t x = 0; x < nx; ++x) {
           const std::size_t j = i + x;
-          if (st[j] != kUnknown || own[j] != kUnknown || region[j]) continue;
+          if (st[j] != kUnknown || own[j] != kUnknown || reg[x]) continue;
           const bool touches = (x > 0 && own[j - 1] == kOccupied) || (x + 1 < nx && own[j + 1] == kOccupied) ||
                                (y > 0 && own[j - nx] == kOccupied) || (y + 1 < ny && own[j + nx] == kOccupied) ||
                                (z > 0 && own[j - sz] == kOccupied) || (z + 1 < nz && own[j + sz] == kOccupied);
