@@ -4,6 +4,7 @@
 
 #include "occseg/parallel.hpp"
 #include "huge_pages.hpp"
+#include "own_states_internal.hpp"
 
 namespace occseg {
 
@@ -17,15 +18,28 @@ double mean_occupancy(const Grid& grid, const Block& b) {
   return sum / static_cast<double>(b.volume());
 }
 
-std::vector<std::uint8_t> create_segments(const Grid& grid, const std::vector<Block>& blocks,
-                                          const Params& params) {
+namespace {
+
+std::vector<std::uint8_t> create(const Grid& grid, const std::vector<Block>& blocks, const Params& params,
+                                 std::vector<std::uint8_t>* own) {
   std::vector<std::uint8_t> states;
   resize_huge(states, grid.dims.count());
+  float lo = 0, hi = 0;
+  if (own) {
+    resize_huge(*own, grid.dims.count());
+    detail::float_bounds(params.free_below, params.occupied_above, lo, hi);
+  }
   parallel_for_dynamic(blocks.size(), params.threads, [&](std::size_t b, std::size_t e) {
     for (std::size_t i = b; i < e; ++i) {  // blocks are disjoint: no two threads write one voxel
       const Block& blk = blocks[i];
-      const auto s = static_cast<std::uint8_t>(params.state_of(mean_occupancy(grid, blk)));
       const std::size_t width = blk.hi[0] - blk.lo[0];
+      if (own)  // the block's rows are about to be read for its mean: in cache for both
+        for (std::uint32_t z = blk.lo[2]; z < blk.hi[2]; ++z)
+          for (std::uint32_t y = blk.lo[1]; y < blk.hi[1]; ++y) {
+            const std::size_t at = grid.index(blk.lo[0], y, z);
+            detail::own_states_of(grid.p.data() + at, width, lo, hi, own->data() + at);
+          }
+      const auto s = static_cast<std::uint8_t>(params.state_of(mean_occupancy(grid, blk)));
       const std::uint64_t eight = 0x0101010101010101ull * s;
       for (std::uint32_t z = blk.lo[2]; z < blk.hi[2]; ++z)
         for (std::uint32_t y = blk.lo[1]; y < blk.hi[1]; ++y) {
@@ -37,6 +51,18 @@ std::vector<std::uint8_t> create_segments(const Grid& grid, const std::vector<Bl
     }
   });
   return states;
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> create_segments(const Grid& grid, const std::vector<Block>& blocks,
+                                          const Params& params) {
+  return create(grid, blocks, params, nullptr);
+}
+
+std::vector<std::uint8_t> detail::create_segments_and_own_states(const Grid& grid, const std::vector<Block>& blocks,
+                                                                 const Params& params, std::vector<std::uint8_t>& own) {
+  return create(grid, blocks, params, &own);
 }
 
 }  // namespace occseg

@@ -5,6 +5,7 @@
 
 #include "occseg/parallel.hpp"
 #include "huge_pages.hpp"
+#include "own_states_internal.hpp"
 
 #ifdef __SSE2__
 #include <emmintrin.h>
@@ -20,23 +21,6 @@ constexpr std::uint8_t kFree = static_cast<std::uint8_t>(State::free);
 constexpr std::uint8_t kUnknown = static_cast<std::uint8_t>(State::unknown);
 constexpr std::uint8_t kOccupied = static_cast<std::uint8_t>(State::occupied);
 constexpr int kMaxLook = 64;  // params.lookahead's upper bound
-
-// Float thresholds equivalent to the double ones: for every float p,
-// double(p) < below  <=>  p < lo   and   double(p) > above  <=>  p > hi.
-void float_bounds(double below, double above, float& lo, float& hi) {
-  lo = static_cast<float>(below);
-  if (static_cast<double>(lo) < below) lo = std::nextafter(lo, 2.0f);
-  while (static_cast<double>(std::nextafter(lo, -1.0f)) >= below) lo = std::nextafter(lo, -1.0f);
-  hi = static_cast<float>(above);
-  if (static_cast<double>(hi) > above) hi = std::nextafter(hi, -1.0f);
-  while (static_cast<double>(std::nextafter(hi, 2.0f)) <= above) hi = std::nextafter(hi, 2.0f);
-}
-
-__attribute__((target_clones("avx2", "default")))
-void own_row(const float* p, std::size_t n, float lo, float hi, std::uint8_t* out) {
-  for (std::size_t i = 0; i < n; ++i)
-    out[i] = static_cast<std::uint8_t>(p[i] < lo ? kFree : (p[i] > hi ? kOccupied : kUnknown));
-}
 
 // The four cases on own states (own[k] == kFree: p below the band, kOccupied: above it).
 void classify_own(const std::uint8_t* const* own, int n, std::uint8_t from, bool* reassign) {
@@ -259,15 +243,24 @@ void scan_axis(const Dims& d, int axis, int threads, RowFn&& row_fn, PlaneFn&& p
 
 }  // namespace
 
+void detail::float_bounds(double below, double above, float& lo, float& hi) {
+  lo = static_cast<float>(below);
+  if (static_cast<double>(lo) < below) lo = std::nextafter(lo, 2.0f);
+  while (static_cast<double>(std::nextafter(lo, -1.0f)) >= below) lo = std::nextafter(lo, -1.0f);
+  hi = static_cast<float>(above);
+  if (static_cast<double>(hi) > above) hi = std::nextafter(hi, -1.0f);
+  while (static_cast<double>(std::nextafter(hi, 2.0f)) <= above) hi = std::nextafter(hi, 2.0f);
+}
+
 std::vector<std::uint8_t> own_states(const Grid& g, const Params& params) {
   std::vector<std::uint8_t> own;
   resize_huge(own, g.p.size());
   float lo, hi;
-  float_bounds(params.free_below, params.occupied_above, lo, hi);
+  detail::float_bounds(params.free_below, params.occupied_above, lo, hi);
   const std::size_t chunk = 1 << 16;
   parallel_for((own.size() + chunk - 1) / chunk, params.threads, [&](std::size_t c0, std::size_t c1) {
     const std::size_t b = c0 * chunk, e = std::min(own.size(), c1 * chunk);
-    own_row(g.p.data() + b, e - b, lo, hi, own.data() + b);
+    detail::own_states_of(g.p.data() + b, e - b, lo, hi, own.data() + b);
   });
   return own;
 }

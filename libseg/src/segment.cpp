@@ -17,6 +17,7 @@
 #include "occseg/refine.hpp"
 #include "occseg/registry.hpp"
 #include "occseg/texture.hpp"
+#include "own_states_internal.hpp"
 #include "segment_internal.hpp"
 
 namespace occseg {
@@ -114,18 +115,17 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, st
   tex = TextureMap();  // free the codes before the per-voxel states exist
   release_freed_memory();
   st.begin("creation");
-  std::vector<std::uint8_t> states = create_segments(grid, blocks, params);
+  std::vector<std::uint8_t> own;  // the voxels' own states, found while creation reads the map
+  std::vector<std::uint8_t> states = detail::create_segments_and_own_states(grid, blocks, params, own);
   if (keep_stages) {
     r.blocks = blocks;
     r.created_states = states;
   }
   st.begin("refinement");
-  {
-    const std::vector<std::uint8_t> own = own_states(grid, params);
-    refine_unknown(states, own, grid.dims, params);
-    refine_boundaries(states, own, grid.dims, params);
-    if (params.preset == Preset::default_preset) apply_voxel_rules(states, own, grid.dims, params);
-  }
+  refine_unknown(states, own, grid.dims, params);
+  refine_boundaries(states, own, grid.dims, params);
+  if (params.preset == Preset::default_preset) apply_voxel_rules(states, own, grid.dims, params);
+  own = std::vector<std::uint8_t>();
   release_freed_memory();
   st.begin("labelling");
   // The states go in: they are freed inside, before the segment statistics.

@@ -1,0 +1,49 @@
+// Each voxel's own state (free below the band, occupied above it, unknown inside it), shared by
+// own_states() (refine.cpp) and the segment creation that computes it on its way (create.cpp).
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "occseg/divide.hpp"
+#include "occseg/grid.hpp"
+#include "occseg/params.hpp"
+
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
+namespace occseg::detail {
+
+// Float thresholds equivalent to the double ones: for every float p,
+// double(p) < below  <=>  p < lo   and   double(p) > above  <=>  p > hi.
+void float_bounds(double below, double above, float& lo, float& hi);
+
+// out[i] = own state of p[i] for i in [0, n): 0 (free) when p < lo, 2 (occupied) when p > hi,
+// else 1 (also for NaN, which never reaches here: maps are checked first).
+inline void own_states_of(const float* p, std::size_t n, float lo, float hi, std::uint8_t* out) {
+  std::size_t i = 0;
+#ifdef __SSE2__
+  // 1 + (p < lo ? -1 : 0) - (p > hi ? -1 : 0), eight voxels per step.
+  const __m128 l = _mm_set1_ps(lo), h = _mm_set1_ps(hi);
+  const __m128i one = _mm_set1_epi32(1);
+  for (; i + 8 <= n; i += 8) {
+    const __m128 a = _mm_loadu_ps(p + i), b = _mm_loadu_ps(p + i + 4);
+    const __m128i sa = _mm_sub_epi32(_mm_add_epi32(one, _mm_castps_si128(_mm_cmplt_ps(a, l))),
+                                     _mm_castps_si128(_mm_cmpgt_ps(a, h)));
+    const __m128i sb = _mm_sub_epi32(_mm_add_epi32(one, _mm_castps_si128(_mm_cmplt_ps(b, l))),
+                                     _mm_castps_si128(_mm_cmpgt_ps(b, h)));
+    const __m128i s16 = _mm_packs_epi32(sa, sb);
+    _mm_storel_epi64(reinterpret_cast<__m128i*>(out + i), _mm_packus_epi16(s16, s16));
+  }
+#endif
+  for (; i < n; ++i) out[i] = static_cast<std::uint8_t>(p[i] < lo ? 0 : (p[i] > hi ? 2 : 1));
+}
+
+// create_segments(), also writing every voxel's own state into `own` (resized to the map) while
+// it reads the map for the block means: the separate own_states() pass read the 52 MB of a
+// 320 x 320 x 128 map once more. `own` equals own_states(grid, params).
+std::vector<std::uint8_t> create_segments_and_own_states(const Grid& grid, const std::vector<Block>& blocks,
+                                                         const Params& params, std::vector<std::uint8_t>& own);
+
+}  // namespace occseg::detail
