@@ -279,7 +279,7 @@ OCCSEG_API int occseg_context_segment(occseg_result **out, occseg_context *conte
  * zero-filling and paging in 4 bytes per voxel of fresh memory (about 5 % of a call on a
  * 320 x 320 x 128 map). The context keeps one array, the last one handed back, until a call
  * takes it (a map with more voxels than it holds gets fresh memory) or occseg_context_free().
- * The array stays alive through that whole call: its peak memory is about 7.5 bytes per voxel
+ * The array stays alive through that whole call: its peak memory is about 6.5 bytes per voxel
  * beyond the map instead of 5.2, a trade for speed the caller makes per result.
  * A NULL context just frees the result; a NULL result is a no-op. Accessors must not be used on
  * `result` afterwards. */

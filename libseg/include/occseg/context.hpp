@@ -29,7 +29,7 @@ class Context {
   // docs/performance.md). `result` is left empty. The context keeps one array, the last one
   // handed back, until a call takes it (a map with more voxels than it holds gets fresh memory)
   // or the context is destroyed. The array is alive through that whole call, so its peak memory
-  // is about 7.5 bytes per voxel beyond the map instead of 5.2: speed for memory, by choice.
+  // is about 6.5 bytes per voxel beyond the map instead of 5.2: speed for memory, by choice.
   void recycle(Result&& result);
 
   // parallel_for over this context's threads (same chunks as the free parallel_for with the
