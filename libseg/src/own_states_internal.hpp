@@ -42,7 +42,8 @@ inline void own_states_of(const float* p, std::size_t n, float lo, float hi, std
 
 // create_segments(), also writing every voxel's own state into `own` (resized to the map) while
 // it reads the map for the block means: the separate own_states() pass read the 52 MB of a
-// 320 x 320 x 128 map once more. `own` equals own_states(grid, params).
+// 320 x 320 x 128 map once more. When the blocks tile the map (division's leaves do), `own`
+// equals own_states(grid, params); voxels outside every block are left at 0.
 std::vector<std::uint8_t> create_segments_and_own_states(const Grid& grid, const std::vector<Block>& blocks,
                                                          const Params& params, std::vector<std::uint8_t>& own);
 
