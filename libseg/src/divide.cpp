@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <tuple>
 
 #ifdef __SSE2__
 #include <emmintrin.h>
@@ -145,6 +146,7 @@ struct Tree {
   std::vector<std::uint64_t> masks;
   std::vector<Child> child;
   std::vector<std::uint8_t> ready;
+  std::vector<std::uint32_t> order;  // Smin nodes in the order they are counted
 };
 
 // Per-thread scratch for the children of one block (reused for every block the thread handles).
@@ -294,13 +296,21 @@ struct Divider {
     if (t.masks.size() < nn * words) t.masks.resize(nn * words);
     t.child.assign(nn, Child());
     t.ready.assign(nn, 0);
+    // The Smin blocks first, in scan order of their corners: x-neighbours then share the cache
+    // lines of their 8-code rows (four blocks per line), where the tree's order jumped between
+    // octants and planes.
+    t.order.clear();
+    for (std::size_t i = 1; i < nn; ++i)
+      if (t.nodes[i].nk == 0) t.order.push_back(static_cast<std::uint32_t>(i));
+    std::sort(t.order.begin(), t.order.end(), [&](std::uint32_t a, std::uint32_t b) {
+      const Block &p = t.nodes[a].b, &q = t.nodes[b].b;
+      return std::tie(p.lo[2], p.lo[1], p.lo[0]) < std::tie(q.lo[2], q.lo[1], q.lo[0]);
+    });
+    for (std::uint32_t i : t.order) count(t.nodes[i].b, t.hist.data() + i * stride);
     for (std::size_t i = nn; i-- > 1;) {  // octants after their parent: bottom up
       const Tree::Node& nd = t.nodes[i];
+      if (nd.nk == 0) continue;
       std::uint32_t* h = t.hist.data() + i * stride;
-      if (nd.nk == 0) {
-        count(nd.b, h);
-        continue;
-      }
       const std::uint32_t* first = t.hist.data() + std::size_t(nd.first) * stride;
       std::copy(first, first + bins, h);
       for (int k = 1; k < nd.nk; ++k) add_counts(h, first + k * stride, bins);
