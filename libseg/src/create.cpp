@@ -1,6 +1,8 @@
 #include "occseg/create.hpp"
 
+#include <algorithm>
 #include <cstring>
+#include <utility>
 
 #include "occseg/parallel.hpp"
 #include "huge_pages.hpp"
@@ -29,9 +31,14 @@ std::vector<std::uint8_t> create(const Grid& grid, const std::vector<Block>& blo
     resize_huge(*own, grid.dims.count());
     detail::float_bounds(params.free_below, params.occupied_above, lo, hi);
   }
+  // Blocks in scan order of their corners: division lists them tree by tree, octant by octant,
+  // and neighbours along x (whose 32-byte rows share cache lines) came far apart.
+  std::vector<std::pair<std::uint64_t, std::size_t>> order(blocks.size());
+  for (std::size_t i = 0; i < blocks.size(); ++i) order[i] = {grid.index(blocks[i].lo[0], blocks[i].lo[1], blocks[i].lo[2]), i};
+  std::sort(order.begin(), order.end());
   parallel_for_dynamic(blocks.size(), params.threads, [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) {  // blocks are disjoint: no two threads write one voxel
-      const Block& blk = blocks[i];
+    for (std::size_t k = b; k < e; ++k) {  // blocks are disjoint: no two threads write one voxel
+      const Block& blk = blocks[order[k].second];
       const std::size_t width = blk.hi[0] - blk.lo[0];
       if (own)  // the block's rows are about to be read for its mean: in cache for both
         for (std::uint32_t z = blk.lo[2]; z < blk.hi[2]; ++z)
