@@ -99,13 +99,24 @@ const XLogX& xlogx_table() {
 }
 
 // One child histogram with what every pair needs precomputed: its total, its sum f ln f in bin
-// order, and a bit mask of its non-empty bins.
+// order, and a bit mask of its non-empty bins. In the tree the total comes first (it decides
+// whether the child takes part) and the rest only once a pair needs it (`complete`): a block that
+// splits after its first pairs never needed most of its children's sums.
 struct Child {
   std::uint32_t* h = nullptr;
   std::uint64_t* nz = nullptr;
   std::uint64_t n = 0;
   double cells = 0;
+  bool complete = false;
 };
+
+// Sum of n counts (integers: any order gives the same total).
+__attribute__((target_clones("avx2", "default")))
+std::uint64_t total(const std::uint32_t* h, std::size_t n) {
+  std::uint64_t s = 0;
+  for (std::size_t i = 0; i < n; ++i) s += h[i];
+  return s;
+}
 
 // Bit k set when counts[k] != 0, for 64 counts.
 inline std::uint64_t nonzero_mask(const std::uint32_t* counts) {
@@ -169,6 +180,7 @@ struct Divider {
 
   // Total, sum f ln f in bin order and non-empty bin mask of the histogram c.h.
   void finish(Child& c) const {
+    c.complete = true;
     const std::uint32_t* h = c.h;
     c.n = 0;
     c.cells = 0;
@@ -209,12 +221,16 @@ struct Divider {
   // Gmin, so a ratio above X (or Gmin = 0 < Gmax) stays so. Most examined blocks of a real map do
   // split, usually after two or three of their 28 pairs, and the pairs were most of this stage.
   // A plugin similarity may be negative, so it gets every pair.
-  bool split(const Child* const* used, std::size_t n) const {
+  bool split(Child* const* used, std::size_t n) const {
     if (n < 2) return false;
     double gmax = 0, gmin = std::numeric_limits<double>::infinity();
+    auto ready = [&](Child& c) -> const Child& {
+      if (!c.complete) finish(c);
+      return c;
+    };
     for (std::size_t a = 0; a < n; ++a)
       for (std::size_t b = a + 1; b < n; ++b) {
-        const double v = sim ? compare_histograms(*sim, used[a]->h, used[b]->h, bins) : g(*used[a], *used[b]);
+        const double v = sim ? compare_histograms(*sim, used[a]->h, used[b]->h, bins) : g(ready(*used[a]), ready(*used[b]));
         gmax = std::max(gmax, v);
         gmin = std::min(gmin, v);
         if (!sim && gmax > 0 && (gmin == 0 || gmax / gmin > params.split_ratio)) return true;
@@ -254,7 +270,7 @@ struct Divider {
       run(kids[0], size / 2, leaves, s);
       return;
     }
-    const Child* used[8];
+    Child* used[8];
     std::size_t nu = 0;
     for (int k = 0; k < nk; ++k) {
       histogram(kids[k], s.kids[k]);
@@ -322,7 +338,8 @@ struct Divider {
     if (!t.ready[i]) {
       c.h = t.hist.data() + i * words * 64;
       c.nz = t.masks.data() + i * words;
-      finish(c);
+      c.n = total(c.h, bins);
+      c.complete = false;
       t.ready[i] = 1;
     }
     return c;
@@ -338,10 +355,10 @@ struct Divider {
       run_tree(t, nd.first, leaves);
       return;
     }
-    const Child* used[8];
+    Child* used[8];
     std::size_t nu = 0;
     for (int k = 0; k < nd.nk; ++k) {
-      const Child& c = child(t, nd.first + static_cast<std::size_t>(k));
+      Child& c = child(t, nd.first + static_cast<std::size_t>(k));
       if (c.n) used[nu++] = &c;
     }
     if (!split(used, nu)) {
