@@ -10,6 +10,7 @@
 #include "occseg/histogram.hpp"
 #include "occseg/texture.hpp"
 #include "occseg/texture2d.hpp"
+#include "codes_internal.hpp"
 #include "registry_internal.hpp"
 
 namespace occseg {
@@ -43,6 +44,11 @@ int fail(const occseg_plugin_call* call, int code, const std::string& message) {
 
 TextureMap lbp6_native(const Grid& grid, const Params& params) {
   return compute_texture(grid, params.contrast_bins, params.threads);
+}
+
+int lbp6_native_into(const Grid& grid, const Params& params, std::uint16_t* codes) {
+  detail::compute_texture_into(grid, params.contrast_bins, params.threads, reinterpret_cast<detail::code_t*>(codes));
+  return 64 * params.contrast_bins;
 }
 
 // The generic path of lbp6 (what a caller of the C callback gets): the same codes as the native
@@ -144,6 +150,6 @@ const occseg_plugin_descriptor kBuiltin = {
 
 const occseg_plugin_descriptor* builtin_stages_descriptor() { return &kBuiltin; }
 
-void attach_builtin_natives() { set_native_texture("lbp6", lbp6_native); }
+void attach_builtin_natives() { set_native_texture("lbp6", lbp6_native, lbp6_native_into); }
 
 }  // namespace occseg

@@ -23,14 +23,11 @@ double mean_occupancy(const Grid& grid, const Block& b) {
 namespace {
 
 std::vector<std::uint8_t> create(const Grid& grid, const std::vector<Block>& blocks, const Params& params,
-                                 std::vector<std::uint8_t>* own) {
+                                 std::uint8_t* own) {
   std::vector<std::uint8_t> states;
   resize_huge(states, grid.dims.count());
   float lo = 0, hi = 0;
-  if (own) {
-    resize_huge(*own, grid.dims.count());
-    detail::float_bounds(params.free_below, params.occupied_above, lo, hi);
-  }
+  if (own) detail::float_bounds(params.free_below, params.occupied_above, lo, hi);
   // Blocks in scan order of their corners: division lists them tree by tree, octant by octant,
   // and neighbours along x (whose 32-byte rows share cache lines) came far apart.
   std::vector<std::pair<std::uint64_t, std::size_t>> order(blocks.size());
@@ -44,7 +41,7 @@ std::vector<std::uint8_t> create(const Grid& grid, const std::vector<Block>& blo
         for (std::uint32_t z = blk.lo[2]; z < blk.hi[2]; ++z)
           for (std::uint32_t y = blk.lo[1]; y < blk.hi[1]; ++y) {
             const std::size_t at = grid.index(blk.lo[0], y, z);
-            detail::own_states_of(grid.p.data() + at, width, lo, hi, own->data() + at);
+            detail::own_states_of(grid.p.data() + at, width, lo, hi, own + at);
           }
       const auto s = static_cast<std::uint8_t>(params.state_of(mean_occupancy(grid, blk)));
       const std::uint64_t eight = 0x0101010101010101ull * s;
@@ -68,8 +65,8 @@ std::vector<std::uint8_t> create_segments(const Grid& grid, const std::vector<Bl
 }
 
 std::vector<std::uint8_t> detail::create_segments_and_own_states(const Grid& grid, const std::vector<Block>& blocks,
-                                                                 const Params& params, std::vector<std::uint8_t>& own) {
-  return create(grid, blocks, params, &own);
+                                                                 const Params& params, std::uint8_t* own) {
+  return create(grid, blocks, params, own);
 }
 
 }  // namespace occseg

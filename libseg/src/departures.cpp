@@ -6,6 +6,7 @@
 
 #include "occseg/parallel.hpp"
 #include "huge_pages.hpp"
+#include "own_states_internal.hpp"
 #include "occseg/refine.hpp"
 
 #ifdef __SSE2__
@@ -23,25 +24,38 @@ constexpr std::uint8_t kOccupied = static_cast<std::uint8_t>(State::occupied);
 // The opening works on bit masks, 64 voxels of a row per word: its six passes then stream 1/8 of
 // the memory the byte masks took (13 MB per pass on a 320 x 320 x 128 map). Row r of the mask is
 // words [r * W, (r + 1) * W), W = ceil(nx / 64), voxel x at bit x % 64 of word x / 64; the bits
-// past nx in a row's last word are kept 0.
+// past nx in a row's last word are kept 0. The words live in the mask's own vector, or in
+// scratch storage handed in (segment() gives part of the label array, which then holds no labels
+// yet); word_t may alias that storage's type (see codes_internal.hpp).
+typedef std::uint64_t __attribute__((__may_alias__)) word_t;
 struct BitMask {
   std::size_t nx = 0, rows = 0, W = 0;
-  std::vector<std::uint64_t> w;
-  BitMask(std::size_t nx_, std::size_t rows_) : nx(nx_), rows(rows_), W((nx_ + 63) / 64), w(rows_ * W, 0) {}
-  std::uint64_t* row(std::size_t r) { return w.data() + r * W; }
-  const std::uint64_t* row(std::size_t r) const { return w.data() + r * W; }
+  std::vector<std::uint64_t> own_words;
+  word_t* w = nullptr;
+  BitMask(std::size_t nx_, std::size_t rows_, void* storage = nullptr) : nx(nx_), rows(rows_), W((nx_ + 63) / 64) {
+    if (storage) {
+      w = static_cast<word_t*>(storage);
+      std::fill(w, w + rows * W, std::uint64_t(0));
+    } else {
+      own_words.assign(rows * W, 0);
+      w = reinterpret_cast<word_t*>(own_words.data());
+    }
+  }
+  static std::size_t bytes(std::size_t nx, std::size_t rows) { return rows * ((nx + 63) / 64) * sizeof(std::uint64_t); }
+  word_t* row(std::size_t r) { return w + r * W; }
+  const word_t* row(std::size_t r) const { return w + r * W; }
   std::uint64_t tail() const { return nx % 64 ? (std::uint64_t(1) << (nx % 64)) - 1 : ~std::uint64_t(0); }
 };
 
 // in[x + k] of a bit row (k in [1, 63]), with `out_bit` for positions past the row.
-inline std::uint64_t from_right(const std::uint64_t* a, std::size_t W, std::size_t i, unsigned k, std::uint64_t pad,
+inline std::uint64_t from_right(const word_t* a, std::size_t W, std::size_t i, unsigned k, std::uint64_t pad,
                                 std::uint64_t out_word) {
   const std::uint64_t cur = i + 1 == W ? a[i] | pad : a[i];
   const std::uint64_t next = i + 1 < W ? (i + 2 == W ? a[i + 1] | pad : a[i + 1]) : out_word;
   return (cur >> k) | (next << (64 - k));
 }
 // in[x - k] of a bit row (k in [1, 63]), with `out_word` bits for positions before the row.
-inline std::uint64_t from_left(const std::uint64_t* a, std::size_t i, unsigned k, std::uint64_t out_word) {
+inline std::uint64_t from_left(const word_t* a, std::size_t i, unsigned k, std::uint64_t out_word) {
   const std::uint64_t prev = i > 0 ? a[i - 1] : out_word;
   return (a[i] << k) | (prev >> (64 - k));
 }
@@ -57,8 +71,8 @@ void bit_box_pass(const BitMask& in, BitMask& out, const Dims& d, int axis, int 
     const std::uint64_t pad = erode ? ~tail : 0, outside = erode ? ~std::uint64_t(0) : 0;
     parallel_for_dynamic(in.rows, threads, [&](std::size_t r0, std::size_t r1) {
       for (std::size_t rw = r0; rw < r1; ++rw) {
-        const std::uint64_t* a = in.row(rw);
-        std::uint64_t* o = out.row(rw);
+        const word_t* a = in.row(rw);
+        word_t* o = out.row(rw);
         for (std::size_t i = 0; i < W; ++i) {
           std::uint64_t v = a[i];
           for (int k = 1; k <= r && std::size_t(k) < d.nx; ++k) {
@@ -82,12 +96,12 @@ void bit_box_pass(const BitMask& in, BitMask& out, const Dims& d, int axis, int 
     for (std::size_t pl = p0; pl < p1; ++pl)
       for (std::size_t k = 0; k < len; ++k) {
         const std::size_t base = pl * plane;
-        std::uint64_t* o = out.row(base + k * step);
+        word_t* o = out.row(base + k * step);
         const std::size_t lo = k >= R ? k - R : 0, hi = std::min(len - 1, k + R);
-        const std::uint64_t* first = in.row(base + lo * step);
+        const word_t* first = in.row(base + lo * step);
         std::copy(first, first + W, o);
         for (std::size_t j = lo + 1; j <= hi; ++j) {
-          const std::uint64_t* a = in.row(base + j * step);
+          const word_t* a = in.row(base + j * step);
           if (erode)
             for (std::size_t i = 0; i < W; ++i) o[i] &= a[i];
           else
@@ -98,7 +112,7 @@ void bit_box_pass(const BitMask& in, BitMask& out, const Dims& d, int axis, int 
 }
 
 // Bits of one row: own[x] at 0.5. SSE2 (every x86-64) 16 voxels at a time.
-void pack_half(const std::uint8_t* own, std::size_t nx, std::uint64_t* bits) {
+void pack_half(const std::uint8_t* own, std::size_t nx, word_t* bits) {
   const std::size_t W = (nx + 63) / 64;
   std::fill(bits, bits + W, 0);
   std::size_t x = 0;
@@ -115,7 +129,7 @@ void pack_half(const std::uint8_t* own, std::size_t nx, std::uint64_t* bits) {
 
 // out[x] = bit x of the row, and own[x] at 0.5 (the opening only shrinks the 0.5 mask; kept
 // anyway).
-void unpack_half(const std::uint64_t* bits, const std::uint8_t* own, std::size_t nx, std::uint8_t* out) {
+void unpack_half(const word_t* bits, const std::uint8_t* own, std::size_t nx, std::uint8_t* out) {
   std::size_t x = 0;
 #ifdef __SSE2__
   const __m128i sel = _mm_setr_epi8(1, 2, 4, 8, 16, 32, 64, -128, 1, 2, 4, 8, 16, 32, 64, -128);
@@ -179,16 +193,19 @@ namespace {
 // and in a region). apply_voxel_rules() reads it row by row; the byte mask of unknown_regions()
 // is made from it only when asked for: allocating, zero-filling and writing 13 MB of bytes, and
 // reading them back, cost more than the opening itself.
-BitMask region_bits(const std::vector<std::uint8_t>& own, const Dims& d, const Params& params) {
-  const std::size_t nx = d.nx, rows = d.ny * d.nz;
-  BitMask a(nx, rows);
+BitMask region_bits(const std::uint8_t* own, const Dims& d, const Params& params, std::uint8_t* scratch = nullptr,
+                    std::size_t scratch_bytes = 0) {
+  const std::size_t nx = d.nx, rows = d.ny * d.nz, bytes = BitMask::bytes(nx, rows);
+  // Two masks in the scratch when it holds them (not for very narrow maps: a word per row).
+  const bool fits = scratch && 2 * bytes <= scratch_bytes;
+  BitMask a(nx, rows, fits ? scratch : nullptr);
   parallel_for_dynamic(rows, params.threads, [&](std::size_t r0, std::size_t r1) {
-    for (std::size_t rw = r0; rw < r1; ++rw) pack_half(own.data() + rw * nx, nx, a.row(rw));
+    for (std::size_t rw = r0; rw < r1; ++rw) pack_half(own + rw * nx, nx, a.row(rw));
   });
   const int r = params.gap_radius;
   if (r <= 0) return a;  // no opening: every 0.5 voxel is in a region
   // Opening = erosion then dilation, each separable into three axis passes (ping-pong bit masks).
-  BitMask b(nx, rows);
+  BitMask b(nx, rows, fits ? scratch + bytes : nullptr);
   for (int pass = 0; pass < 6; ++pass) {
     bit_box_pass(a, b, d, pass % 3, r, pass < 3, params.threads);
     std::swap(a, b);
@@ -201,7 +218,7 @@ inline bool bit(const BitMask& m, std::size_t row, std::size_t x) { return (m.ro
 }  // namespace
 
 std::vector<std::uint8_t> unknown_regions(const std::vector<std::uint8_t>& own, const Dims& d, const Params& params) {
-  const BitMask a = region_bits(own, d, params);
+  const BitMask a = region_bits(own.data(), d, params);
   std::vector<std::uint8_t> m;
   resize_huge(m, own.size());
   const std::size_t nx = d.nx;
@@ -219,7 +236,7 @@ namespace {
 // be labelled free everywhere but along its rim. `queue` holds the seeds (gap voxels left unknown
 // that touch an occupied voxel), in any order: the result is a set (connected components), so it
 // does not depend on visiting order.
-void flood_gaps_from_objects(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own,
+void flood_gaps_from_objects(std::vector<std::uint8_t>& st, const std::uint8_t* own,
                              const BitMask& region, const Dims& d, std::vector<std::size_t>& queue) {
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, sz = nx * ny;
   auto gap = [&](std::size_t i) { return own[i] == kUnknown && !bit(region, i / nx, i % nx); };
@@ -244,9 +261,9 @@ void flood_gaps_from_objects(std::vector<std::uint8_t>& st, const std::vector<st
 
 }  // namespace
 
-void apply_voxel_rules(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
-                       const Params& params) {
-  const BitMask region = region_bits(own, d, params);
+void detail::apply_voxel_rules(std::vector<std::uint8_t>& st, const std::uint8_t* own, const Dims& d,
+                               const Params& params, std::uint8_t* scratch, std::size_t scratch_bytes) {
+  const BitMask region = region_bits(own, d, params, scratch, scratch_bytes);
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, sz = nx * ny;
   const std::vector<std::uint8_t> none(nx, kFree);  // outside the map: no occupied neighbour
   // Reads only own states and each voxel's own entry of st, so rows are independent. Rows that
@@ -259,7 +276,7 @@ void apply_voxel_rules(std::vector<std::uint8_t>& st, const std::vector<std::uin
     for (std::size_t z = z0; z < z1; ++z)
       for (std::size_t y = 0; y < ny; ++y) {
         const std::size_t i = nx * (y + ny * z);
-        const std::uint8_t* o = own.data() + i;
+        const std::uint8_t* o = own + i;
         unpack_half(region.row(y + ny * z), o, nx, reg.data());
         if (!rules_row(st.data() + i, o, reg.data(), y > 0 ? o - nx : none.data(),
                        y + 1 < ny ? o + nx : none.data(), z > 0 ? o - sz : none.data(),
@@ -278,6 +295,11 @@ void apply_voxel_rules(std::vector<std::uint8_t>& st, const std::vector<std::uin
     seeds.insert(seeds.end(), mine.begin(), mine.end());
   });
   flood_gaps_from_objects(st, own, region, d, seeds);
+}
+
+void apply_voxel_rules(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
+                       const Params& params) {
+  detail::apply_voxel_rules(st, own.data(), d, params, nullptr, 0);
 }
 
 std::vector<std::uint8_t> unknown_regions(const Grid& g, const Params& params) {

@@ -14,6 +14,7 @@
 #include "occseg/histogram.hpp"
 #include "occseg/parallel.hpp"
 #include "occseg/registry.hpp"
+#include "codes_internal.hpp"
 
 namespace occseg {
 
@@ -31,7 +32,9 @@ bool should_split(const std::vector<const std::uint32_t*>& h, std::size_t bins, 
   return gmax / gmin > x;
 }
 
-void count_codes(const TextureMap& texture, const Dims& dims, const Block& b, std::size_t bins, std::uint32_t* h) {
+namespace {
+
+void count_block(const detail::code_t* codes, const Dims& dims, const Block& b, std::size_t bins, std::uint32_t* h) {
   std::fill(h, h + bins, 0u);
   // Rows that are not uniform count their voxels into three interleaved histograms (x mod 3):
   // such a row is mostly one code with a few others, and one histogram chained the increments
@@ -45,7 +48,7 @@ void count_codes(const TextureMap& texture, const Dims& dims, const Block& b, st
   const std::size_t nx = dims.nx, ny = dims.ny;
   for (std::uint32_t z = b.lo[2]; z < b.hi[2]; ++z)
     for (std::uint32_t y = b.lo[1]; y < b.hi[1]; ++y) {
-      const std::uint16_t* row = texture.codes.data() + nx * (y + ny * z);
+      const detail::code_t* row = codes + nx * (y + ny * z);
       std::uint32_t x = b.lo[0];
 #ifdef __SSE2__
       // Eight equal codes (uniform texture: most rows of most maps) in one add.
@@ -70,6 +73,12 @@ void count_codes(const TextureMap& texture, const Dims& dims, const Block& b, st
       h[i] += h1[i] + h2[i];
       h1[i] = h2[i] = 0;
     }
+}
+
+}  // namespace
+
+void count_codes(const TextureMap& texture, const Dims& dims, const Block& b, std::size_t bins, std::uint32_t* h) {
+  count_block(reinterpret_cast<const detail::code_t*>(texture.codes.data()), dims, b, bins, h);
 }
 
 namespace {
@@ -169,14 +178,14 @@ struct Scratch {
 
 struct Divider {
   const Grid& grid;
-  const TextureMap& tex;
+  const detail::code_t* codes;
   const Params& params;
   const XLogX& xl;
   std::size_t bins;
   std::size_t words;  // 64-bit words of a bin mask
   const Similarity* sim;  // params.similarity, or nullptr for the G-statistic computed here
 
-  void count(const Block& b, std::uint32_t* h) const { count_codes(tex, grid.dims, b, bins, h); }
+  void count(const Block& b, std::uint32_t* h) const { count_block(codes, grid.dims, b, bins, h); }
 
   // Total, sum f ln f in bin order and non-empty bin mask of the histogram c.h.
   void finish(Child& c) const {
@@ -372,14 +381,18 @@ struct Divider {
 }  // namespace
 
 std::vector<Block> divide(const Grid& grid, const TextureMap& tex, const Params& params) {
+  return detail::divide_codes(grid, reinterpret_cast<const detail::code_t*>(tex.codes.data()), tex.code_count(), params);
+}
+
+std::vector<Block> detail::divide_codes(const Grid& grid, const code_t* codes, int code_count, const Params& params) {
   const std::uint32_t s = static_cast<std::uint32_t>(params.smax);
   const std::size_t n[3] = {grid.dims.nx, grid.dims.ny, grid.dims.nz};
   std::size_t t[3];
   for (int a = 0; a < 3; ++a) t[a] = (n[a] + s - 1) / s;
   const std::size_t tops = t[0] * t[1] * t[2];
   std::vector<std::vector<Block>> per_top(tops);
-  const std::size_t bins = static_cast<std::size_t>(tex.code_count());
-  const Divider d{grid, tex, params, xlogx_table(), bins, (bins + 63) / 64, division_similarity(params)};
+  const std::size_t bins = static_cast<std::size_t>(code_count);
+  const Divider d{grid, codes, params, xlogx_table(), bins, (bins + 63) / 64, division_similarity(params)};
   const bool tree_path = d.use_tree();
   // Threads take top blocks one at a time from a shared counter: they differ a lot in cost
   // (uniform ones never split), and fixed shares left one thread idle for a quarter of the stage.

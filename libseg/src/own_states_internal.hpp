@@ -40,11 +40,21 @@ inline void own_states_of(const float* p, std::size_t n, float lo, float hi, std
   for (; i < n; ++i) out[i] = static_cast<std::uint8_t>(p[i] < lo ? 0 : (p[i] > hi ? 2 : 1));
 }
 
-// create_segments(), also writing every voxel's own state into `own` (resized to the map) while
-// it reads the map for the block means: the separate own_states() pass read the 52 MB of a
-// 320 x 320 x 128 map once more. When the blocks tile the map (division's leaves do), `own`
-// equals own_states(grid, params); voxels outside every block are left at 0.
+// create_segments(), also writing every voxel's own state into `own` (grid.dims.count() bytes,
+// any storage: segment() uses the label array) while it reads the map for the block means: the
+// separate own_states() pass read the 52 MB of a 320 x 320 x 128 map once more. When the blocks
+// tile the map (division's leaves do), `own` equals own_states(grid, params); voxels outside
+// every block are not written.
 std::vector<std::uint8_t> create_segments_and_own_states(const Grid& grid, const std::vector<Block>& blocks,
-                                                         const Params& params, std::vector<std::uint8_t>& own);
+                                                         const Params& params, std::uint8_t* own);
+
+// The refinement steps and the default rules with the own states in any storage (the public
+// versions take a vector; segment() keeps them in the label array). `scratch` (8-byte aligned,
+// or nullptr) may hold the rules' two bit masks of the opening if it has room.
+void refine_unknown(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& dims, const Params& params);
+void refine_boundaries(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& dims,
+                       const Params& params);
+void apply_voxel_rules(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& dims,
+                       const Params& params, std::uint8_t* scratch, std::size_t scratch_bytes);
 
 }  // namespace occseg::detail

@@ -269,33 +269,43 @@ std::vector<std::uint8_t> own_states(const Grid& g, const Params& params) {
   return own;
 }
 
-void refine_unknown(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
-                    const Params& params) {
+void detail::refine_unknown(std::vector<std::uint8_t>& st, const std::uint8_t* own, const Dims& d,
+                            const Params& params) {
   // kSixDirections order: x+, x-, y+, y-, z+, z-.
   for (int axis = 0; axis < 3; ++axis)
     scan_axis(
         d, axis, params.threads,
         [&](std::size_t first, std::size_t len, int step) {
-          unknown_row(st.data() + first, own.data() + first, len, step);
+          unknown_row(st.data() + first, own + first, len, step);
         },
         [&](std::size_t base, Plane pl, std::uint8_t*, int step) {
-          unknown_plane(st.data() + base, own.data() + base, d.nx, pl, step);
+          unknown_plane(st.data() + base, own + base, d.nx, pl, step);
         });
 }
 
-void refine_boundaries(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
-                       const Params& params) {
+void refine_unknown(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
+                    const Params& params) {
+  detail::refine_unknown(st, own.data(), d, params);
+}
+
+void detail::refine_boundaries(std::vector<std::uint8_t>& st, const std::uint8_t* own, const Dims& d,
+                               const Params& params) {
   const int look = std::clamp(params.lookahead, 1, kMaxLook);
   for (int pass = 0; pass < params.refine_passes; ++pass)
     for (int axis = 0; axis < 3; ++axis)
       scan_axis(
           d, axis, params.threads,
           [&](std::size_t first, std::size_t len, int step) {
-            boundary_row(st.data() + first, own.data() + first, len, step, look);
+            boundary_row(st.data() + first, own + first, len, step, look);
           },
           [&](std::size_t base, Plane pl, std::uint8_t* lane, int step) {
-            boundary_plane(st.data() + base, own.data() + base, d.nx, pl, step, look, lane);
+            boundary_plane(st.data() + base, own + base, d.nx, pl, step, look, lane);
           });
+}
+
+void refine_boundaries(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
+                       const Params& params) {
+  detail::refine_boundaries(st, own.data(), d, params);
 }
 
 void refine_unknown(std::vector<std::uint8_t>& st, const Grid& g, const Params& params) {

@@ -311,11 +311,15 @@ std::string install_descriptor(const occseg_plugin_descriptor* d, const std::str
   return d->name;
 }
 
-void set_native_texture(const std::string& name, TextureMap (*native)(const Grid&, const Params&)) {
+void set_native_texture(const std::string& name, TextureMap (*native)(const Grid&, const Params&),
+                        int (*native_into)(const Grid&, const Params&, std::uint16_t*)) {
   Registry& g = raw();
   std::unique_lock<std::shared_mutex> lock(g.tables);
   for (auto& e : g.textures)
-    if (e->name == name && e->plugin == kBuiltinPlugin) e->native = native;
+    if (e->name == name && e->plugin == kBuiltinPlugin) {
+      e->native = native;
+      e->native_into = native_into;
+    }
 }
 
 bool plugin_loaded(const std::string& name) {

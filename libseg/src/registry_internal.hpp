@@ -1,6 +1,7 @@
 // Shared by registry.cpp, plugin_loader.cpp, stages.cpp, builtin_stages.cpp and params.cpp:
 // the pieces of the registry that are not public API.
 #pragma once
+#include <cstdint>
 #include <string>
 
 #include "occseg/occseg_plugin.h"
@@ -38,7 +39,8 @@ int host_contrast_levels(const double* contrast, size_t count, uint32_t bins, ui
 // attached after the descriptor is installed.
 const occseg_plugin_descriptor* builtin_stages_descriptor();
 void attach_builtin_natives();
-void set_native_texture(const std::string& name, TextureMap (*native)(const Grid&, const Params&));
+void set_native_texture(const std::string& name, TextureMap (*native)(const Grid&, const Params&),
+                        int (*native_into)(const Grid&, const Params&, std::uint16_t*) = nullptr);
 
 // params.cpp: parses `text` as a value of the parameter `info` (number kinds: a finite number
 // within the bounds, integral for "int"); throws Error(invalid_argument) naming it otherwise.

@@ -17,6 +17,8 @@
 #include "occseg/refine.hpp"
 #include "occseg/registry.hpp"
 #include "occseg/texture.hpp"
+#include "codes_internal.hpp"
+#include "huge_pages.hpp"
 #include "own_states_internal.hpp"
 #include "segment_internal.hpp"
 
@@ -102,30 +104,50 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, st
   check_map(grid, params.threads, !(op && op->native));
   Result r;
   r.dims = grid.dims;
-  // label_components() keeps the storage when it is large enough (a recycled array); a smaller
-  // one would only be copied into fresh storage.
+  // A recycled array large enough is kept (resize_huge below); a smaller one would only be copied
+  // into fresh storage.
   if (labels.capacity() < grid.dims.count()) labels = std::vector<std::uint32_t>();
   r.labels = std::move(labels);
   Stages st(params, r);
 
+  // The label array holds the stages' per-voxel scratch until the labelling writes the labels:
+  // the texture codes (2 bytes per voxel) through the division, then the own states (1 byte)
+  // through the refinement, beside the default rules' bit masks. It is allocated (or recycled)
+  // once and paged in once; separate arrays cost three more allocations, zero-fills and page-ins
+  // (docs/performance.md, "Fourth round"). Peak: the labels and the states (5 bytes per voxel),
+  // as before; a recycled array no longer adds to it.
+  const std::size_t n = grid.dims.count();
+  std::vector<Block> blocks;
   st.begin("texture");
-  TextureMap tex = run_texture(grid, params);  // params.texture; lbp6 runs compute_texture directly
-  st.begin("division");
-  std::vector<Block> blocks = divide(grid, tex, params);
-  tex = TextureMap();  // free the codes before the per-voxel states exist
-  release_freed_memory();
+  if (op && op->native_into) {
+    resize_huge(r.labels, n);
+    const int codes = op->native_into(grid, params, reinterpret_cast<std::uint16_t*>(r.labels.data()));
+    st.begin("division");
+    blocks = detail::divide_codes(grid, reinterpret_cast<const detail::code_t*>(r.labels.data()), codes, params);
+  } else {  // a plugin's codes come in their own array: the label array waits for it to go
+    TextureMap tex = run_texture(grid, params);
+    st.begin("division");
+    blocks = divide(grid, tex, params);
+    tex = TextureMap();
+    release_freed_memory();
+    resize_huge(r.labels, n);
+  }
   st.begin("creation");
-  std::vector<std::uint8_t> own;  // the voxels' own states, found while creation reads the map
+  std::uint8_t* const own = reinterpret_cast<std::uint8_t*>(r.labels.data());  // the voxels' own states
   std::vector<std::uint8_t> states = detail::create_segments_and_own_states(grid, blocks, params, own);
   if (keep_stages) {
     r.blocks = blocks;
     r.created_states = states;
   }
   st.begin("refinement");
-  refine_unknown(states, own, grid.dims, params);
-  refine_boundaries(states, own, grid.dims, params);
-  if (params.preset == Preset::default_preset) apply_voxel_rules(states, own, grid.dims, params);
-  own = std::vector<std::uint8_t>();
+  detail::refine_unknown(states, own, grid.dims, params);
+  detail::refine_boundaries(states, own, grid.dims, params);
+  if (params.preset == Preset::default_preset) {
+    // The rest of the label array (3 bytes per voxel, from an 8-byte boundary) takes the rules'
+    // bit masks: allocated apart, they raised the peak by 0.25 byte per voxel.
+    const std::size_t skip = (n + 7) / 8 * 8, bytes = r.labels.size() * sizeof(std::uint32_t);
+    detail::apply_voxel_rules(states, own, grid.dims, params, own + skip, bytes - skip);
+  }
   release_freed_memory();
   st.begin("labelling");
   // The states go in: they are freed inside, before the segment statistics.

@@ -8,6 +8,7 @@
 #include "occseg/error.hpp"
 #include "occseg/parallel.hpp"
 #include "cpu_features.hpp"
+#include "codes_internal.hpp"
 #include "huge_pages.hpp"
 
 namespace occseg {
@@ -81,7 +82,7 @@ constexpr std::uint16_t kRecheck = 0xFFFF;
 // 1 voxel in 100 on noisy maps, fewer on real ones) it is marked kRecheck and recomputed in
 // double by the caller, so the steps are exactly those of texture_unit().
 template <unsigned Present>
-inline void contrast_row_impl(const float* p, const std::ptrdiff_t* off, std::size_t n, std::uint16_t* out) {
+inline void contrast_row_impl(const float* p, const std::ptrdiff_t* off, std::size_t n, detail::code_t* out) {
   const std::ptrdiff_t o0 = off[0], o1 = off[1], o2 = off[2], o3 = off[3], o4 = off[4], o5 = off[5];
   constexpr float kErr = 1e-6f, kFine = ContrastQuantizer::kFine;
   constexpr int kTop = ContrastQuantizer::kFine - 1;
@@ -136,7 +137,7 @@ inline void lbp_row_impl(const float* p, const std::ptrdiff_t* off, std::size_t 
 
 // The hot 3D kernels, compiled for AVX2 and for baseline x86-64 with run-time dispatch.
 __attribute__((target_clones("avx2", "default")))
-void contrast_row_3d(const float* p, const std::ptrdiff_t* off, std::size_t n, std::uint16_t* out) {
+void contrast_row_3d(const float* p, const std::ptrdiff_t* off, std::size_t n, detail::code_t* out) {
   contrast_row_impl<63>(p, off, n, out);
 }
 __attribute__((target_clones("avx2", "default")))
@@ -157,7 +158,7 @@ void lbp_row_3d(const float* p, const std::ptrdiff_t* off, std::size_t n, std::u
 // sure steps are texture_unit()'s, as are the kRecheck voxels', whichever kernel ran. No FMA in
 // the interval itself: it would change the rounding the bound accounts for.
 __attribute__((target("avx2"))) void contrast_row_avx2(const float* p, const std::ptrdiff_t* off, std::size_t n,
-                                                       std::uint16_t* out) {
+                                                       detail::code_t* out) {
   const __m256 zero = _mm256_setzero_ps(), err = _mm256_set1_ps(1e-6f);
   const __m256 fine = _mm256_set1_ps(static_cast<float>(ContrastQuantizer::kFine));
   const __m256i top = _mm256_set1_epi32(ContrastQuantizer::kFine - 1), recheck = _mm256_set1_epi32(kRecheck);
@@ -208,7 +209,7 @@ __attribute__((target("avx2"))) void contrast_row_avx2(const float* p, const std
 // combination). Returns the voxels done (a multiple of 8); the caller finishes the row.
 __attribute__((target("avx2"))) std::size_t codes_row_avx2(const float* p, const std::ptrdiff_t* off, std::size_t n,
                                                            const std::uint16_t* rises, std::size_t nr,
-                                                           std::uint16_t bins, std::uint16_t* row) {
+                                                           std::uint16_t bins, detail::code_t* row) {
   __m256i rise[16];
   for (std::size_t k = 0; k < nr; ++k) rise[k] = _mm256_set1_epi32(rises[k]);
   const __m256i zero = _mm256_setzero_si256(), one = _mm256_set1_epi32(1);
@@ -243,7 +244,7 @@ std::atomic<bool> g_vector_texture{true};
 
 // True when some v[x] is kRecheck (branch-free, so it vectorises: rechecks are rare).
 __attribute__((target_clones("avx2", "default")))
-bool any_recheck(const std::uint16_t* v, std::size_t n) {
+bool any_recheck(const detail::code_t* v, std::size_t n) {
   unsigned any = 0;
   for (std::size_t x = 0; x < n; ++x) any |= v[x] == kRecheck;
   return any != 0;
@@ -254,7 +255,7 @@ bool any_recheck(const std::uint16_t* v, std::size_t n) {
 // are skipped with one test; otherwise each goes to its own histogram, so runs of equal steps do
 // not chain their increments through one counter.
 constexpr std::size_t kStepStride = ContrastQuantizer::kFine + 1;
-void count_steps(const std::uint16_t* v, std::size_t n, std::uint64_t* h) {
+void count_steps(const detail::code_t* v, std::size_t n, std::uint64_t* h) {
   std::size_t x = 0;
   for (; x + 4 <= n; x += 4) {
     std::uint64_t four;
@@ -292,7 +293,7 @@ const PackTable kPack;
 // `list` (room for n + 8), and only they are counted. On the scene 20 % of the voxels are
 // textured, scattered among flat ones, so count_steps()'s "are these four all flat?" is often
 // mispredicted (first pass 45.8 -> 44.4 ms on one thread).
-__attribute__((target("avx2"))) void count_steps_avx2(const std::uint16_t* v, std::size_t n, std::uint64_t* h,
+__attribute__((target("avx2"))) void count_steps_avx2(const detail::code_t* v, std::size_t n, std::uint64_t* h,
                                                       std::uint16_t* list) {
   std::size_t x = 0, len = 0;
   const __m128i zero = _mm_setzero_si128();
@@ -318,7 +319,7 @@ __attribute__((target("avx2"))) void count_steps_avx2(const std::uint16_t* v, st
 
 // lvl[x] = (v[x] != 0) + #{k : v[x] > rises[k]}.
 __attribute__((target_clones("avx2", "default")))
-void levels_row(const std::uint16_t* __restrict v, std::size_t n, const std::uint16_t* rises, std::size_t nr,
+void levels_row(const detail::code_t* __restrict v, std::size_t n, const std::uint16_t* rises, std::size_t nr,
                 std::uint16_t* __restrict lvl) {
   for (std::size_t x = 0; x < n; ++x) lvl[x] = v[x] != 0;
   for (std::size_t k = 0; k < nr; ++k) {
@@ -330,13 +331,13 @@ void levels_row(const std::uint16_t* __restrict v, std::size_t n, const std::uin
 // code[x] = lbp[x] * bins + lvl[x].
 __attribute__((target_clones("avx2", "default")))
 void combine_row(const std::uint8_t* __restrict lbp, const std::uint16_t* __restrict lvl, std::size_t n,
-                 std::uint16_t bins, std::uint16_t* __restrict code) {
+                 std::uint16_t bins, detail::code_t* __restrict code) {
   for (std::size_t x = 0; x < n; ++x) code[x] = static_cast<std::uint16_t>(lbp[x] * bins + lvl[x]);
 }
 
 // Other neighbourhoods (maps with an axis of size 1) are small: no dispatch.
 template <unsigned P>
-void contrast_any(const float* p, const std::ptrdiff_t* off, std::size_t n, std::uint16_t* out, unsigned present) {
+void contrast_any(const float* p, const std::ptrdiff_t* off, std::size_t n, detail::code_t* out, unsigned present) {
   if constexpr (P == 64) {
     (void)p, (void)off, (void)n, (void)out, (void)present;
   } else if (present == P) {
@@ -393,16 +394,20 @@ void set_vector_texture(bool enabled) { g_vector_texture.store(enabled, std::mem
 }  // namespace detail
 
 TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads) {
+  TextureMap tm;
+  tm.bins = contrast_bins;
+  if (contrast_bins >= 2 && contrast_bins <= 64) resize_huge(tm.codes, grid.dims.count());
+  detail::compute_texture_into(grid, contrast_bins, threads, reinterpret_cast<detail::code_t*>(tm.codes.data()));
+  return tm;
+}
+
+void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threads, code_t* codes) {
   if (contrast_bins < 2 || contrast_bins > 64)
     throw Error(Status::invalid_argument, "contrast_bins = " + std::to_string(contrast_bins) +
                                               " is outside [2, 64]");
   const Dims& d = grid.dims;
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz;
   const Stencil sten = stencil(d);
-  TextureMap tm;
-  tm.bins = contrast_bins;
-  resize_huge(tm.codes, d.count());
-  std::uint16_t* codes = tm.codes.data();
   const float* p = grid.p.data();
   // Pass 1: fine contrast step + 1 of every interior voxel, parked in the code array, and the
   // distribution of non-zero contrasts (per-chunk histograms summed in chunk order: integer counts,
@@ -427,7 +432,7 @@ TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads) {
           // Plane z + 2 is fetched from memory into L2 while plane z is computed, so that the check
           // of plane z + 1 (above) does not stream from memory with nothing computed meanwhile.
           if (z + 2 < nz) prefetch_row(p + nx * (y + ny * (z + 2)), nx * sizeof(float));
-          std::uint16_t* row = codes + nx * (y + ny * z);
+          detail::code_t* row = codes + nx * (y + ny * z);
           std::size_t x0 = 0, x1 = 0;
           if (!interior_row(d, y, z, x0, x1)) {
             std::fill(row, row + nx, kNoTexture);
@@ -478,7 +483,7 @@ TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads) {
         if (z + 2 < nz) prefetch_row(p + nx * (y + ny * (z + 2)), nx * sizeof(float));
         std::size_t x0 = 0, x1 = 0;
         if (!interior_row(d, y, z, x0, x1)) continue;
-        std::uint16_t* row = codes + nx * (y + ny * z) + x0;
+        detail::code_t* row = codes + nx * (y + ny * z) + x0;
         const float* prow = p + nx * (y + ny * z) + x0;
         std::size_t n = x1 - x0;
 #ifdef OCCSEG_TEXTURE_AVX2
@@ -497,7 +502,6 @@ TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads) {
         combine_row(lbp.data(), lvl.data(), n, static_cast<std::uint16_t>(contrast_bins), row);
       }
   });
-  return tm;
 }
 
 }  // namespace occseg

@@ -43,8 +43,8 @@ TEST(Create, OwnStatesFoundDuringCreationMatchTheirDefinition) {
     Params p;
     p.threads = 1 + static_cast<int>(k % 3);
     const std::vector<Block> blocks = divide(g, compute_texture(g, p.contrast_bins, p.threads), p);
-    std::vector<std::uint8_t> own;
-    const std::vector<std::uint8_t> st = detail::create_segments_and_own_states(g, blocks, p, own);
+    std::vector<std::uint8_t> own(g.p.size(), 7);  // 7: never written
+    const std::vector<std::uint8_t> st = detail::create_segments_and_own_states(g, blocks, p, own.data());
     EXPECT_EQ(st, create_segments(g, blocks, p)) << "map " << k;
     ASSERT_EQ(own.size(), g.p.size());
     std::size_t wrong = 0;

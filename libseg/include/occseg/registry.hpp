@@ -30,6 +30,10 @@ struct TextureOperator {
   // reject values outside [0, 1] itself, as compute_texture() does: segment() leaves the value
   // check to an operator that has one, and checks the map first for the others.
   TextureMap (*native)(const Grid& grid, const Params& params) = nullptr;
+  // Built-in operators only, optional: `native` writing the codes into caller storage of
+  // grid.dims.count() codes instead of a fresh array; returns the number of distinct codes.
+  // segment() keeps them in the label array, which it allocates anyway (docs/performance.md).
+  int (*native_into)(const Grid& grid, const Params& params, std::uint16_t* codes) = nullptr;
 };
 
 struct Similarity {

@@ -1,0 +1,25 @@
+// Storage of texture codes (internal). segment() keeps the built-in operator's codes in the label
+// array it allocates anyway (docs/performance.md, "Fourth round"), so codes may live in storage
+// of another type. Every access to them goes through code_t, which may alias any type (a GCC and
+// Clang attribute): type-based alias analysis then never reorders code accesses against the
+// array's other uses, whatever the compiler inlines (LTO included).
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "occseg/divide.hpp"
+#include "occseg/grid.hpp"
+#include "occseg/params.hpp"
+
+namespace occseg::detail {
+
+typedef std::uint16_t __attribute__((__may_alias__)) code_t;
+
+// compute_texture() writing the codes into `codes` (grid.dims.count() entries) instead of a
+// fresh array. Same codes, same errors.
+void compute_texture_into(const Grid& grid, int contrast_bins, int threads, code_t* codes);
+
+// divide() on codes in any storage: `code_count` distinct codes (TextureMap::code_count()).
+std::vector<Block> divide_codes(const Grid& grid, const code_t* codes, int code_count, const Params& params);
+
+}  // namespace occseg::detail
