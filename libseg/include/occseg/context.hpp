@@ -25,11 +25,11 @@ class Context {
 
   // Hands a result the caller is done with back to the context: the next segment(context, ...)
   // writes its labels into this result's label array instead of allocating, zero-filling and
-  // paging in 4 bytes per voxel of fresh memory (about 5 % of a call on a 320 x 320 x 128 map,
+  // paging in 4 bytes per voxel of fresh memory (about 7 % of a call on a 320 x 320 x 128 map,
   // docs/performance.md). `result` is left empty. The context keeps one array, the last one
   // handed back, until a call takes it (a map with more voxels than it holds gets fresh memory)
-  // or the context is destroyed. The array is alive through that whole call, so its peak memory
-  // is about 6.5 bytes per voxel beyond the map instead of 5.2: speed for memory, by choice.
+  // or the context is destroyed: 4 bytes per voxel held between calls. The call that takes it
+  // uses it for its scratch and its labels, so that call's peak is a plain call's.
   void recycle(Result&& result);
 
   // parallel_for over this context's threads (same chunks as the free parallel_for with the
