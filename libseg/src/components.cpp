@@ -7,6 +7,7 @@
 #include "occseg/error.hpp"
 #include "occseg/parallel.hpp"
 #include "huge_pages.hpp"
+#include "segment_internal.hpp"
 
 #ifdef __SSE2__
 #include <emmintrin.h>
@@ -115,9 +116,7 @@ struct SlotStats {  // one segment's share of one slab
 void label_states(const std::uint8_t* s, std::vector<std::uint8_t>* release, const Grid& g,
                   std::vector<std::uint32_t>& labels, std::vector<Segment>& segments, int threads, bool occupied26) {
   const std::size_t n = g.dims.count();
-  if (n >= std::numeric_limits<std::uint32_t>::max())
-    throw Error(Status::unsupported, "maps of " + std::to_string(n) +
-                                         " voxels exceed the uint32 labels (at most 2^32 - 2 voxels)");
+  detail::check_labels_fit(n);
   const std::size_t nx = g.dims.nx, ny = g.dims.ny, nz = g.dims.nz, sz = nx * ny;
   const std::size_t slabs = (nz + kLabelSlab - 1) / kLabelSlab;
   resize_huge(labels, n);
@@ -320,6 +319,12 @@ void label_states(const std::uint8_t* s, std::vector<std::uint8_t>* release, con
 }
 
 }  // namespace
+
+void detail::check_labels_fit(std::size_t voxels) {
+  if (voxels >= std::numeric_limits<std::uint32_t>::max())
+    throw Error(Status::unsupported, "maps of " + std::to_string(voxels) +
+                                         " voxels exceed the uint32 labels (at most 2^32 - 2 voxels)");
+}
 
 void label_components(const std::vector<std::uint8_t>& states, const Grid& grid, std::vector<std::uint32_t>& labels,
                       std::vector<Segment>& segments, int threads, bool occupied26) {

@@ -117,6 +117,7 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, st
   // (docs/performance.md, "Fourth round"). Peak: the labels and the states (5 bytes per voxel),
   // as before; a recycled array no longer adds to it.
   const std::size_t n = grid.dims.count();
+  detail::check_labels_fit(n);  // before any stage allocates: the labels could not hold the result
   std::vector<Block> blocks;
   st.begin("texture");
   if (op && op->native_into) {

@@ -12,4 +12,10 @@ namespace occseg {
 // paged in for them (every label is written). The result is the same as segment()'s.
 Result segment_into(const Grid& grid, const Params& params, bool keep_stages, std::vector<std::uint32_t>&& labels);
 
+namespace detail {
+// Throws Error(unsupported) when a map of `voxels` voxels cannot have uint32 labels (2^32 - 1 or
+// more): segment() asks before it allocates anything, label_components() again.
+void check_labels_fit(std::size_t voxels);
+}  // namespace detail
+
 }  // namespace occseg

@@ -4,6 +4,8 @@
 #include <cmath>
 
 #include "occseg/components.hpp"
+#include "occseg/error.hpp"
+#include "segment_internal.hpp"
 
 using namespace occseg;
 
@@ -183,5 +185,18 @@ TEST(Components, SlabSharesAreAddedInSlabOrderWhateverFinishesFirst) {
   for (int run = 0; run < 3; ++run) {
     label_components(st, g, labels, segs, 2, true);
     EXPECT_EQ(segs[big].mop, forward / double(n)) << "run " << run;
+  }
+}
+
+TEST(Components, LabelRangeIsCheckedBeforeAnythingIsAllocated) {
+  // segment() asks before its first allocation (a map that large would first fill 4 bytes per
+  // voxel of scratch); labels are uint32 with one value to spare.
+  EXPECT_NO_THROW(detail::check_labels_fit((std::size_t(1) << 32) - 2));
+  try {
+    detail::check_labels_fit((std::size_t(1) << 32) - 1);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.status(), Status::unsupported);
+    EXPECT_NE(std::string(e.what()).find("4294967295 voxels"), std::string::npos) << e.what();
   }
 }
