@@ -59,7 +59,7 @@ void count_block(const detail::code_t* codes, const Dims& dims, const Block& b, 
           continue;
         }
         used = true;
-        const std::uint16_t* r = row + x;
+        const detail::code_t* r = row + x;
         std::uint32_t* const bank[3] = {h, h1, h2};
         for (int k = 0; k < 8; ++k)
           if (r[k] != kNoTexture) ++bank[k % 3][r[k]];
