@@ -393,18 +393,25 @@ namespace detail {
 void set_vector_texture(bool enabled) { g_vector_texture.store(enabled, std::memory_order_relaxed); }
 }  // namespace detail
 
+namespace {
+void check_contrast_bins(int contrast_bins) {
+  if (contrast_bins < 2 || contrast_bins > 64)
+    throw Error(Status::invalid_argument, "contrast_bins = " + std::to_string(contrast_bins) +
+                                              " is outside [2, 64]");
+}
+}  // namespace
+
 TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads) {
+  check_contrast_bins(contrast_bins);  // before the code array is allocated
   TextureMap tm;
   tm.bins = contrast_bins;
-  if (contrast_bins >= 2 && contrast_bins <= 64) resize_huge(tm.codes, grid.dims.count());
+  resize_huge(tm.codes, grid.dims.count());
   detail::compute_texture_into(grid, contrast_bins, threads, reinterpret_cast<detail::code_t*>(tm.codes.data()));
   return tm;
 }
 
 void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threads, code_t* codes) {
-  if (contrast_bins < 2 || contrast_bins > 64)
-    throw Error(Status::invalid_argument, "contrast_bins = " + std::to_string(contrast_bins) +
-                                              " is outside [2, 64]");
+  check_contrast_bins(contrast_bins);
   const Dims& d = grid.dims;
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz;
   const Stencil sten = stencil(d);
