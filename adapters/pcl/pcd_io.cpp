@@ -96,6 +96,26 @@ void check_header(const std::string& path) {
                          "') is not a PCD header field");
   }
   if (data.empty()) bad_file(path, "the header has no DATA line");
+  // PCL's header loop does not stop at DATA: it goes on through the body's lines, skipping empty
+  // ones and those whose first word starts with '#', and reads any whose first word begins with a
+  // header keyword as a header line (a body starting with "COLUMNS" redefines the fields, and
+  // PCL then reads past its arrays). It stops at the first other line; so does this check.
+  const std::streampos body_start = in.tellg();
+  for (std::string body; std::getline(in, body);) {
+    if (body.empty()) continue;
+    std::istringstream ls(body);
+    std::string word;
+    ls >> word;
+    if (!word.empty() && word[0] == '#') continue;
+    for (const char* key : {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT", "WIDTH", "HEIGHT", "VIEWPOINT",
+                            "POINTS", "DATA"})
+      if (word.compare(0, std::strlen(key), key) == 0)
+        bad_file(path, "the data after the DATA line starts with '" + std::string(key) +
+                           "', which PCL would read as a header line");
+    break;
+  }
+  in.clear();
+  in.seekg(body_start);
   if (!nfields || nsize != nfields || ntype != nfields || (ncount && ncount != nfields))
     bad_file(path, "FIELDS, SIZE, TYPE and COUNT do not list the same number of fields");
   if (!have_width || !have_points || width * height != points)

@@ -234,6 +234,25 @@ TEST(AbsurdHeaders, NrrdClaimingTrillionsOfSamplesIsRefusedWithoutAllocating) {
   EXPECT_NE(o.message.find(f), std::string::npos) << o.message;
 }
 
+TEST(AbsurdHeaders, PcdBodyThatPclWouldReadAsHeaderIsRefused) {
+  // PCL's header loop reads on past DATA while lines start with a header keyword: a binary body
+  // beginning with "COLUMNS" redefined the fields, and PCL read past its arrays (a crash found by
+  // fuzzing; tests/reliability/fuzz/regressions/pcd/pcl-body-read-as-header).
+  const std::string dir = scratch("pcd_body_header");
+  const std::string header = "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA binary\n";
+  for (const std::string body : {"COLUMNS a b c d e f g h i j k l\n", "\n# c\nSIZE 8 8 8 8 8 8 8 8 8 8 8 8\n"}) {
+    std::string data = body;
+    data.resize(24, '\0');
+    put(dir + "/body.pcd", header + data);
+    const Outcome o = read_as("pcd", dir + "/body.pcd");
+    EXPECT_EQ(o.status, Status::format) << o.message;
+    EXPECT_NE(o.message.find("which PCL would read as a header line"), std::string::npos) << o.message;
+  }
+  // A body that starts otherwise is data: the same file with other bytes reads.
+  put(dir + "/fine.pcd", header + std::string(24, '\0'));
+  EXPECT_EQ(read_as("pcd", dir + "/fine.pcd").status, Status::ok) << read_as("pcd", dir + "/fine.pcd").message;
+}
+
 TEST(AbsurdHeaders, PcdBtAndGraphCountsBeyondTheFileAreRefused) {
   const std::string dir = scratch("absurd_other");
   std::string pcd = slurp(kData + "/office1.pcd");
