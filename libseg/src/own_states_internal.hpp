@@ -54,6 +54,8 @@ std::vector<std::uint8_t> create_segments_and_own_states(const Grid& grid, const
 void refine_unknown(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& dims, const Params& params);
 void refine_boundaries(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& dims,
                        const Params& params);
+// refine_unknown() then refine_boundaries(), with sweeps of both fused where they can be.
+void refine(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& dims, const Params& params);
 void apply_voxel_rules(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& dims,
                        const Params& params, std::uint8_t* scratch, std::size_t scratch_bytes);
 

@@ -135,8 +135,7 @@ struct Plane {
   std::ptrdiff_t row;  // distance between successive rows of the plane
 };
 
-// Which planes a scan along `axis` (1 or 2) has, and where plane `o` starts.
-inline std::size_t plane_count(const Dims& d, int axis) { return axis == 1 ? d.nz : d.ny; }
+// Where plane `o` of a scan along `axis` (1 or 2) starts: z = o for y, y = o for z.
 inline std::size_t plane_base(const Dims& d, int axis, std::size_t o) { return axis == 1 ? d.nx * d.ny * o : d.nx * o; }
 inline Plane plane_shape(const Dims& d, int axis) {
   return axis == 1 ? Plane{d.ny, static_cast<std::ptrdiff_t>(d.nx)} : Plane{d.nz, static_cast<std::ptrdiff_t>(d.nx * d.ny)};
@@ -220,30 +219,84 @@ void boundary_plane(std::uint8_t* st, const std::uint8_t* own, std::size_t nx, P
   }
 }
 
-// Runs the forward and the backward scan along `axis` over the whole map, in parallel over
-// independent lines. The two scans of one line (x) or one plane of lines (y, z) run back to
-// back while its voxels are in cache: lines along one axis never share a voxel, so this is the
-// same as the whole forward scan followed by the whole backward scan, in half the sweeps.
-template <class RowFn, class PlaneFn>
-void scan_axis(const Dims& d, int axis, int threads, RowFn&& row_fn, PlaneFn&& plane_fn) {
-  if (axis == 0) {
-    parallel_for_dynamic(d.ny * d.nz, threads, [&](std::size_t r0, std::size_t r1) {
-      for (std::size_t r = r0; r < r1; ++r) {
-        row_fn(r * d.nx, d.nx, +1);
-        row_fn(r * d.nx, d.nx, -1);
-      }
-    });
-    return;
-  }
-  const Plane pl = plane_shape(d, axis);
-  parallel_for_dynamic(plane_count(d, axis), threads, [&](std::size_t o0, std::size_t o1) {
-    std::vector<std::uint8_t> lane(d.nx);
-    for (std::size_t o = o0; o < o1; ++o) {
-      plane_fn(plane_base(d, axis, o), pl, lane.data(), +1);
-      plane_fn(plane_base(d, axis, o), pl, lane.data(), -1);
+// One refinement step: the forward and the backward scan of every line along `axis` (unknown
+// growth, or free/occupied boundaries with windows of `look` voxels).
+struct Sweep {
+  bool unknown;
+  int axis;
+};
+
+// Runs a list of sweeps, in order, over the whole map, in parallel over independent lines.
+//
+// The two scans of one line (x) or one plane of lines (y, z) run back to back while its voxels
+// are in cache: lines along one axis never share a voxel, so this is the same as the whole
+// forward scan followed by the whole backward scan.
+//
+// Consecutive sweeps along x and y run plane by plane (z fixed), and consecutive sweeps along z
+// and x slice by slice (y fixed): the lines of both axes lie inside that plane, so a plane's x
+// sweep followed by its y sweep reads and writes exactly what the whole x sweep followed by the
+// whole y sweep would. The default call's nine sweeps (unknown x y z, two boundary passes x y z)
+// read the map six times instead of nine (docs/performance.md, "Fifth round").
+void run_sweeps(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& d, int threads, int look,
+                const std::vector<Sweep>& sweeps) {
+  std::uint8_t* const st = states.data();
+  const auto row = [&](const Sweep& s, std::size_t first, int step) {
+    if (s.unknown)
+      unknown_row(st + first, own + first, d.nx, step);
+    else
+      boundary_row(st + first, own + first, d.nx, step, look);
+  };
+  const auto plane = [&](const Sweep& s, std::size_t base, std::uint8_t* lane, int step) {
+    const Plane pl = plane_shape(d, s.axis);
+    if (s.unknown)
+      unknown_plane(st + base, own + base, d.nx, pl, step);
+    else
+      boundary_plane(st + base, own + base, d.nx, pl, step, look, lane);
+  };
+  for (std::size_t g = 0; g < sweeps.size();) {
+    // The group's other axis: y (planes of fixed z) or z (slices of fixed y); a lone x sweep
+    // runs by planes.
+    int other = sweeps[g].axis;
+    std::size_t e = g;
+    while (e < sweeps.size() && (sweeps[e].axis == 0 || other == 0 || sweeps[e].axis == other)) {
+      if (sweeps[e].axis != 0) other = sweeps[e].axis;
+      ++e;
     }
-  });
+    if (other == 0) other = 1;
+    const bool by_z = other == 1;  // planes of fixed z, else slices of fixed y
+    parallel_for_dynamic(by_z ? d.nz : d.ny, threads, [&](std::size_t o0, std::size_t o1) {
+      std::vector<std::uint8_t> lane(d.nx);
+      for (std::size_t o = o0; o < o1; ++o)
+        for (std::size_t k = g; k < e; ++k) {
+          const Sweep& s = sweeps[k];
+          if (s.axis == 0) {
+            // the rows of the plane (z = o) or of the slice (y = o)
+            const std::size_t rows = by_z ? d.ny : d.nz, first = by_z ? d.nx * d.ny * o : d.nx * o;
+            const std::size_t stride = by_z ? d.nx : d.nx * d.ny;
+            for (std::size_t r = 0; r < rows; ++r) {
+              row(s, first + r * stride, +1);
+              row(s, first + r * stride, -1);
+            }
+          } else {
+            plane(s, plane_base(d, s.axis, o), lane.data(), +1);
+            plane(s, plane_base(d, s.axis, o), lane.data(), -1);
+          }
+        }
+    });
+    g = e;
+  }
 }
+
+std::vector<Sweep> unknown_sweeps() { return {{true, 0}, {true, 1}, {true, 2}}; }  // x, y, z
+
+std::vector<Sweep> boundary_sweeps(const Params& params) {
+  std::vector<Sweep> s;
+  for (int pass = 0; pass < params.refine_passes; ++pass)
+    for (int axis = 0; axis < 3; ++axis) s.push_back({false, axis});
+  return s;
+}
+
+int lookahead_of(const Params& params) { return std::clamp(params.lookahead, 1, kMaxLook); }
 
 }  // namespace
 
@@ -271,16 +324,7 @@ std::vector<std::uint8_t> own_states(const Grid& g, const Params& params) {
 
 void detail::refine_unknown(std::vector<std::uint8_t>& st, const std::uint8_t* own, const Dims& d,
                             const Params& params) {
-  // kSixDirections order: x+, x-, y+, y-, z+, z-.
-  for (int axis = 0; axis < 3; ++axis)
-    scan_axis(
-        d, axis, params.threads,
-        [&](std::size_t first, std::size_t len, int step) {
-          unknown_row(st.data() + first, own + first, len, step);
-        },
-        [&](std::size_t base, Plane pl, std::uint8_t*, int step) {
-          unknown_plane(st.data() + base, own + base, d.nx, pl, step);
-        });
+  run_sweeps(st, own, d, params.threads, lookahead_of(params), unknown_sweeps());  // x+, x-, y+, y-, z+, z-
 }
 
 void refine_unknown(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
@@ -290,17 +334,13 @@ void refine_unknown(std::vector<std::uint8_t>& st, const std::vector<std::uint8_
 
 void detail::refine_boundaries(std::vector<std::uint8_t>& st, const std::uint8_t* own, const Dims& d,
                                const Params& params) {
-  const int look = std::clamp(params.lookahead, 1, kMaxLook);
-  for (int pass = 0; pass < params.refine_passes; ++pass)
-    for (int axis = 0; axis < 3; ++axis)
-      scan_axis(
-          d, axis, params.threads,
-          [&](std::size_t first, std::size_t len, int step) {
-            boundary_row(st.data() + first, own + first, len, step, look);
-          },
-          [&](std::size_t base, Plane pl, std::uint8_t* lane, int step) {
-            boundary_plane(st.data() + base, own + base, d.nx, pl, step, look, lane);
-          });
+  run_sweeps(st, own, d, params.threads, lookahead_of(params), boundary_sweeps(params));
+}
+
+void detail::refine(std::vector<std::uint8_t>& st, const std::uint8_t* own, const Dims& d, const Params& params) {
+  std::vector<Sweep> sweeps = unknown_sweeps();
+  for (const Sweep& s : boundary_sweeps(params)) sweeps.push_back(s);
+  run_sweeps(st, own, d, params.threads, lookahead_of(params), sweeps);
 }
 
 void refine_boundaries(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,

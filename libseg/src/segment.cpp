@@ -141,8 +141,7 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, st
     r.created_states = states;
   }
   st.begin("refinement");
-  detail::refine_unknown(states, own, grid.dims, params);
-  detail::refine_boundaries(states, own, grid.dims, params);
+  detail::refine(states, own, grid.dims, params);
   if (params.preset == Preset::default_preset) {
     // The rest of the label array (3 bytes per voxel, from an 8-byte boundary) takes the rules'
     // bit masks: allocated apart, they raised the peak by 0.25 byte per voxel.
