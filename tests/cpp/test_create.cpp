@@ -53,3 +53,67 @@ TEST(Create, OwnStatesFoundDuringCreationMatchTheirDefinition) {
     EXPECT_EQ(own, own_states(g, p)) << "map " << k;
   }
 }
+
+// The block means are the sums of mean_occupancy(): its additions in its order (z, then y, then x
+// inside the block), whether creation reads the map row by row (blocks that tile it on a lattice
+// of cells, as division's leaves do) or block by block (any other disjoint blocks). With t =
+// 2^-54 (a quarter of 1.0's ulp), 1.0 + t rounds back to 1.0, while k t added before the 1.0
+// give 1 + k t rounded to a multiple of 2^-52: 1.0 exactly for k <= 1 only. A 1.0 placed as a
+// block's first or second voxel in that order makes its sum exactly 1.0, and thresholds on
+// exactly those means tell that order from any other (a row read backwards puts 6 t first).
+TEST(Create, BlockMeansAddInScanOrderOnBothPaths) {
+  const float t = std::ldexp(1.0f, -54);
+  Grid g(Dims{24, 16, 16}, t);
+  g.at(0, 0, 0) = 1.0f;   // first voxel of the 16^3 block A
+  g.at(17, 0, 0) = 1.0f;  // second voxel of the 8^3 block B
+  const Block a{{0, 0, 0}, {16, 16, 16}}, b{{16, 0, 0}, {24, 8, 8}};
+  std::vector<Block> tiling = {a, b, {{16, 8, 0}, {24, 16, 8}}, {{16, 0, 8}, {24, 8, 16}}, {{16, 8, 8}, {24, 16, 16}}};
+  // The same blocks with the last one cut at x = 18: off the 4-voxel lattice, read block by block.
+  std::vector<Block> cut = tiling;
+  cut.back().hi[0] = 18;
+  cut.push_back({{18, 8, 8}, {24, 16, 16}});
+  EXPECT_EQ(mean_occupancy(g, a), 1.0 / 4096);
+  EXPECT_EQ(mean_occupancy(g, b), 1.0 / 512);
+  for (const auto& blocks : {tiling, cut}) {
+    Params p;
+    p.free_below = 1e-9;            // blocks of t only: free
+    p.occupied_above = 1.0 / 4096;  // A exactly at the bound: unknown; any other order: occupied
+    std::vector<std::uint8_t> st = create_segments(g, blocks, p);
+    EXPECT_EQ(st[g.index(5, 9, 3)], 1) << blocks.size() << " blocks";
+    EXPECT_EQ(st[g.index(20, 2, 2)], 2);
+    EXPECT_EQ(st[g.index(20, 12, 12)], 0);
+    p.occupied_above = 1.0 / 512;  // the same for B
+    st = create_segments(g, blocks, p);
+    EXPECT_EQ(st[g.index(20, 2, 2)], 1) << blocks.size() << " blocks";
+    EXPECT_EQ(st[g.index(0, 0, 0)], 1);
+    for (int threads : {1, 2, 3}) {
+      p.threads = threads;
+      EXPECT_EQ(create_segments(g, blocks, p), st) << threads << " threads";
+    }
+  }
+}
+
+// Division's leaves on maps whose sides are not multiples of Smin (cells clipped by the far
+// faces), Smin 4 and 8: every voxel gets the state of its block's mean, and voxels outside every
+// block stay free when the blocks do not tile the map.
+TEST(Create, EveryVoxelGetsItsBlocksState) {
+  const Dims dims[] = {{37, 29, 21}, {70, 9, 33}, {8, 64, 3}};
+  for (std::size_t k = 0; k < 3; ++k) {
+    const Grid g = test::random_map(dims[k], 60 + k, 0.5);
+    Params p;
+    p.smin = k == 1 ? 4 : 8;
+    p.threads = 2;
+    std::vector<Block> blocks = divide(g, compute_texture(g, p.contrast_bins, p.threads), p);
+    for (bool whole : {true, false}) {
+      if (!whole) blocks.erase(blocks.begin() + static_cast<std::ptrdiff_t>(blocks.size() / 2));
+      std::vector<std::uint8_t> expect(g.p.size(), 0);
+      for (const Block& b : blocks) {
+        const auto s = static_cast<std::uint8_t>(p.state_of(mean_occupancy(g, b)));
+        for (std::uint32_t z = b.lo[2]; z < b.hi[2]; ++z)
+          for (std::uint32_t y = b.lo[1]; y < b.hi[1]; ++y)
+            for (std::uint32_t x = b.lo[0]; x < b.hi[0]; ++x) expect[g.index(x, y, z)] = s;
+      }
+      EXPECT_EQ(create_segments(g, blocks, p), expect) << "map " << k << (whole ? "" : ", a block missing");
+    }
+  }
+}
