@@ -51,8 +51,8 @@ def in_terminal(args, interrupt=None, when="", deadline=300, env=None):
     return os.waitstatus_to_exitcode(status), seen.decode(errors="replace")
 
 
-# A long job (seconds: the bar shows after 0.5 s): the cone scene in a 320 x 320 x 256 map,
-# segmented on one thread; reading, segmenting and writing each take a good part of a second.
+# A long job (over a second: the bar shows after 0.5 s): the cone scene in a 320 x 320 x 256
+# map, segmented on one thread; reading, segmenting and writing take 0.2, 0.3 and 0.6 s.
 r = subprocess.run([occseg, "simulate", "--scene", "cone", "--dims", "320", "320", "256", "--out", "sim"], cwd=work,
                    capture_output=True, text=True)
 assert r.returncode == 0, r.stderr
@@ -73,8 +73,10 @@ assert code == 0 and text == "", (code, text)
 
 # Ctrl-C typed in the terminal during the segmentation: it stops at the next stage (or, should
 # the segmentation be over by then, after the file being written): exit 130, one message, no
-# output left.
-code, text = in_terminal(job + ["--out", "seg_int"], interrupt=b"\x03", when="segmenting: ")
+# output left. The bar shows from the start (OCCSEG_PROGRESS_DELAY=0): the whole segmentation
+# now takes less than the default 0.5 s delay.
+now = {"OCCSEG_PROGRESS_DELAY": "0"}
+code, text = in_terminal(job + ["--out", "seg_int"], interrupt=b"\x03", when="segmenting: ", env=now)
 assert code == 130, (code, text)
 assert "occseg: interrupted: stopped, and the output files written so far were removed" in text, text
 assert not os.path.exists(os.path.join(work, "seg_int")), os.listdir(os.path.join(work, "seg_int"))
@@ -83,7 +85,7 @@ assert not os.path.exists(os.path.join(work, "seg_int")), os.listdir(os.path.joi
 os.makedirs(os.path.join(work, "keep"))
 with open(os.path.join(work, "keep", "notes.txt"), "w") as f:
     f.write("mine\n")
-code, text = in_terminal(job + ["--out", "keep"], interrupt=b"\x03", when="segmenting: ")
+code, text = in_terminal(job + ["--out", "keep"], interrupt=b"\x03", when="segmenting: ", env=now)
 assert code == 130 and os.listdir(os.path.join(work, "keep")) == ["notes.txt"], (code, os.listdir(os.path.join(work, "keep")))
 
 # Fusing a point cloud reports through ScanOptions::progress: with the bar shown from the start
