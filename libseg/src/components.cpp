@@ -1,6 +1,7 @@
 #include "occseg/components.hpp"
 
 #include <algorithm>
+#include <cstring>
 #include <limits>
 #include <mutex>
 
@@ -57,37 +58,35 @@ inline std::size_t run_end(const std::uint8_t* s, std::size_t x, std::size_t nx)
   return find_first(s, s[x], false, x + 1, nx);
 }
 
-// End of the run of equal labels that starts at x in the label row `l` of length nx. After the
-// first pass a row's runs of one state are exactly its runs of one local label (a run is one
-// component; neighbours of another state are other components), so the statistics pass finds its
-// runs without the states.
-inline std::size_t label_run_end(const std::uint32_t* l, std::size_t x, std::size_t nx) {
-  const std::uint32_t v = l[x];
-  ++x;
+// First x of the run of equal states that holds voxel x of row `s` (searching back from x).
+inline std::size_t run_start(const std::uint8_t* s, std::size_t x) {
+  const std::uint8_t v = s[x];
 #ifdef __SSE2__
-  const __m128i vv = _mm_set1_epi32(static_cast<int>(v));
-  while (x + 4 <= nx) {
-    const auto m = static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(
-        _mm_cmpeq_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(l + x)), vv))));
-    if (m != 0xFu) return x + static_cast<std::size_t>(__builtin_ctz(~m & 0xFu));
-    x += 4;
+  const __m128i vv = _mm_set1_epi8(static_cast<char>(v));
+  while (x >= 16) {  // voxels [x - 16, x)
+    const auto m = static_cast<unsigned>(_mm_movemask_epi8(
+                       _mm_cmpeq_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(s + x - 16)), vv))) ^
+                   0xFFFFu;
+    if (m) return x - 16 + static_cast<std::size_t>(32 - __builtin_clz(m));  // past the last other state
+    x -= 16;
   }
 #endif
-  while (x < nx && l[x] == v) ++x;
+  while (x > 0 && s[x - 1] == v) --x;
   return x;
 }
 
-// Unites a run of state v (label root `rs`) with every stretch of state v in row `other` over
-// [lo, hi), one union per stretch (the voxels of a stretch share one run): [lo, hi) is the run's
-// own extent for 6-connectivity, one voxel wider on both sides for 26.
-inline void unite_range(std::uint32_t* labels, std::uint8_t v, const std::uint8_t* other, std::size_t other_index,
-                        std::size_t lo, std::size_t hi, std::uint32_t rs) {
-  std::size_t x = lo;
-  while (x < hi) {
+// Calls fn(j) for the first voxel j of every run of state v in row `other` that meets [lo, hi):
+// one call per run (a run is one component), the first one's start found by searching back.
+template <typename Fn>
+inline void for_each_run_in(const std::uint8_t* other, std::uint8_t v, std::size_t lo, std::size_t hi, Fn&& fn) {
+  std::size_t x = find_first(other, v, true, lo, hi);
+  if (x == hi) return;
+  if (x == lo) x = run_start(other, x);
+  while (true) {
+    fn(x);
+    x = find_first(other, v, false, std::max(x + 1, lo), hi);
     x = find_first(other, v, true, x, hi);
-    if (x == hi) break;
-    unite(labels, rs, labels[other_index + x]);
-    x = find_first(other, v, false, x + 1, hi);
+    if (x == hi) return;
   }
 }
 
@@ -111,8 +110,58 @@ struct SlotStats {  // one segment's share of one slab
   std::uint64_t sum[3] = {0, 0, 0};
 };
 
+// Run starts as bits (voxel i at bit i % 8 of byte i / 8): the statistics pass finds its runs
+// there once the states are gone (1/8 byte per voxel; the states are 1). Slabs are a multiple of
+// 8 voxels long, so each slab writes only bytes of its own.
+static_assert(kLabelSlab % 8 == 0, "slabs must start on a byte of the run-start bits");
+
+// First set bit in [i, end) of `bits` (padded by 8 bytes past its last byte), or end.
+inline std::size_t next_start(const std::uint8_t* bits, std::size_t i, std::size_t end) {
+  while (i < end) {
+    std::uint64_t w;
+    std::memcpy(&w, bits + i / 8, sizeof w);  // little-endian: bit i % 8 of byte i / 8 is bit i % 8
+    w >>= i % 8;
+    if (w) return std::min(end, i + static_cast<std::size_t>(__builtin_ctzll(w)));
+    i += 64 - i % 8;
+  }
+  return end;
+}
+
+// The sum of a run's values v[0, n) (a run: a maximal stretch of one segment along x), the
+// documented order of the mean occupancy (components.hpp): voxel k adds to lane k % 8 in turn,
+// the lanes are added as ((l0 + l1) + (l2 + l3)) + ((l4 + l5) + (l6 + l7)). Eight chains of
+// dependent additions instead of one: one chain through the map cost a quarter of the labelling.
+// SSE2 (every x86-64) adds two lanes per instruction, with the same roundings.
+inline double run_sum(const float* v, std::size_t n) {
+  double l[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+  std::size_t k = 0;
+#ifdef __SSE2__
+  if (n >= 8) {
+    __m128d a = _mm_setzero_pd(), b = a, c = a, d = a;  // lanes 0-1, 2-3, 4-5, 6-7
+    for (; k + 8 <= n; k += 8) {
+      const __m128 lo = _mm_loadu_ps(v + k), hi = _mm_loadu_ps(v + k + 4);
+      a = _mm_add_pd(a, _mm_cvtps_pd(lo));
+      b = _mm_add_pd(b, _mm_cvtps_pd(_mm_movehl_ps(lo, lo)));
+      c = _mm_add_pd(c, _mm_cvtps_pd(hi));
+      d = _mm_add_pd(d, _mm_cvtps_pd(_mm_movehl_ps(hi, hi)));
+    }
+    _mm_storeu_pd(l, a);
+    _mm_storeu_pd(l + 2, b);
+    _mm_storeu_pd(l + 4, c);
+    _mm_storeu_pd(l + 6, d);
+  }
+#endif
+  for (; k < n; ++k) l[k & 7] += v[k];
+  return ((l[0] + l[1]) + (l[2] + l[3])) + ((l[4] + l[5]) + (l[6] + l[7]));
+}
+
 // label_components() on states `s`; `release`, when given, holds the states and is emptied as
 // soon as the components are known (before the statistics pass).
+//
+// The label array is written once, with the final labels: until then only the entry of each
+// run's first voxel is used (a run: a maximal stretch of one state along x within a row, which
+// lies in one component), as its union-find parent, then as its slab-local component number.
+// Filling every voxel's entry in the first two passes moved 200 MB more on a 320 x 320 x 128 map.
 void label_states(const std::uint8_t* s, std::vector<std::uint8_t>* release, const Grid& g,
                   std::vector<std::uint32_t>& labels, std::vector<Segment>& segments, int threads, bool occupied26) {
   const std::size_t n = g.dims.count();
@@ -122,9 +171,10 @@ void label_states(const std::uint8_t* s, std::vector<std::uint8_t>* release, con
   resize_huge(labels, n);
   std::uint32_t* lab = labels.data();
   const float* p = g.p.data();
+  std::vector<std::uint8_t> starts(n / 8 + 9, 0);  // run starts, for the statistics pass
 
-  // 1. Each slab on its own: runs along x, united with the rows before them in y and z (inside
-  // the slab), then numbered 0..m-1 by first voxel; labels hold these local numbers.
+  // 1. Each slab on its own: runs along x, united with the runs they touch in the rows before
+  // them in y and z (inside the slab), then numbered 0..m-1 by first voxel.
   std::vector<std::uint32_t> local_count(slabs, 0);
   std::vector<std::vector<std::uint8_t>> local_state(slabs);  // state of each local component
   for_each_slab(slabs, threads, [&](std::size_t sl) {
@@ -136,35 +186,39 @@ void label_states(const std::uint8_t* s, std::vector<std::uint8_t>* release, con
         for (std::size_t x = 0; x < nx;) {
           const std::size_t e = run_end(row, x, nx);
           const auto rs = static_cast<std::uint32_t>(i0 + x);
-          std::fill(lab + i0 + x, lab + i0 + e, rs);
-          if (occupied26 && row[x] == kOccupiedState) {
+          lab[rs] = rs;
+          const std::uint8_t v = row[x];
+          auto with = [&](std::size_t other0) {  // unites with the run starting at other0 + j
+            return [&, other0](std::size_t j) { unite(lab, rs, static_cast<std::uint32_t>(other0 + j)); };
+          };
+          if (occupied26 && v == kOccupiedState) {
             // Neighbours before this run in scan order: row y-1 of this plane and rows y-1..y+1
             // of the plane below, each one voxel wider on both sides.
             const std::size_t lo = x > 0 ? x - 1 : 0, hi = std::min(nx, e + 1);
-            if (y > 0) unite_range(lab, kOccupiedState, row - nx, i0 - nx, lo, hi, rs);
+            if (y > 0) for_each_run_in(row - nx, v, lo, hi, with(i0 - nx));
             if (z > zb)
               for (std::size_t yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < ny; ++yy) {
                 const std::size_t j0 = nx * (yy + ny * (z - 1));
-                unite_range(lab, kOccupiedState, s + j0, j0, lo, hi, rs);
+                for_each_run_in(s + j0, v, lo, hi, with(j0));
               }
           } else {
-            if (y > 0) unite_range(lab, row[x], row - nx, i0 - nx, x, e, rs);
-            if (z > zb) unite_range(lab, row[x], row - sz, i0 - sz, x, e, rs);
+            if (y > 0) for_each_run_in(row - nx, v, x, e, with(i0 - nx));
+            if (z > zb) for_each_run_in(row - sz, v, x, e, with(i0 - sz));
           }
           x = e;
         }
       }
     // Local numbering: a run start's parent is a smaller run start of the slab, already
-    // renumbered (the parent array is being overwritten in index order).
+    // renumbered (the parent entries are being overwritten in index order).
     std::uint32_t m = 0;
     for (std::size_t i0 = zb * sz; i0 < ze * sz; i0 += nx)
       for (std::size_t x = 0; x < nx;) {
         const std::size_t e = run_end(s + i0, x, nx);
         const std::size_t rs = i0 + x;
+        starts[rs / 8] = static_cast<std::uint8_t>(starts[rs / 8] | (1u << (rs % 8)));
         const std::uint32_t par = lab[rs];
         if (par == rs) local_state[sl].push_back(s[rs]);
-        const std::uint32_t id = par == rs ? m++ : lab[par];
-        std::fill(lab + rs, lab + i0 + e, id);
+        lab[rs] = par == rs ? m++ : lab[par];
         x = e;
       }
     local_count[sl] = m;
@@ -172,42 +226,42 @@ void label_states(const std::uint8_t* s, std::vector<std::uint8_t>* release, con
 
   // 2. Join the slabs: union-find over all local components (global index = base + local id),
   // uniting across each slab's first plane; roots are the earliest components in scan order.
+  // Rows of the two planes are walked run by run: one union per pair of touching runs.
   std::vector<std::uint32_t> base(slabs + 1, 0);
   for (std::size_t sl = 0; sl < slabs; ++sl) base[sl + 1] = base[sl] + local_count[sl];
   std::vector<std::uint32_t> parent(base[slabs]);
   for (std::uint32_t k = 0; k < base[slabs]; ++k) parent[k] = k;
   for (std::size_t sl = 1; sl < slabs; ++sl) {
     const std::size_t z = sl * kLabelSlab;
-    std::uint32_t last_a = std::numeric_limits<std::uint32_t>::max(), last_b = last_a;
-    for (std::size_t i = z * sz; i < (z + 1) * sz; ++i) {
-      if (s[i] != s[i - sz]) continue;
-      const std::uint32_t a = base[sl] + lab[i], b = base[sl - 1] + lab[i - sz];
-      if (a == last_a && b == last_b) continue;
-      unite(parent.data(), a, b);
-      last_a = a;
-      last_b = b;
-    }
-    if (!occupied26) continue;
-    // Occupied voxels of the slab's first plane also meet the 8 diagonal neighbours below. The
-    // same pair of components recurs for neighbouring voxels (on a noisy map 9 unions per voxel
-    // made this serial loop most of the labelling time): skip a pair just united.
-    last_a = last_b = std::numeric_limits<std::uint32_t>::max();
-    for (std::size_t y = 0; y < ny; ++y)
-      for (std::size_t x = 0; x < nx; ++x) {
-        const std::size_t i = z * sz + y * nx + x;
-        if (s[i] != kOccupiedState) continue;
-        const std::uint32_t a = base[sl] + lab[i];
-        for (std::size_t yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < ny; ++yy)
-          for (std::size_t xx = x > 0 ? x - 1 : 0; xx <= x + 1 && xx < nx; ++xx) {
-            const std::size_t j = (z - 1) * sz + yy * nx + xx;
-            if (s[j] != kOccupiedState) continue;
-            const std::uint32_t b = base[sl - 1] + lab[j];
-            if (a == last_a && b == last_b) continue;
-            unite(parent.data(), a, b);
-            last_a = a;
-            last_b = b;
-          }
+    for (std::size_t y = 0; y < ny; ++y) {
+      const std::size_t i0 = nx * (y + ny * z), j0 = i0 - sz;  // this row, the row below
+      const std::uint8_t *a = s + i0, *b = s + j0;
+      // Runs [xa, ea) of this row and [xb, eb) of the row below, stepped along together.
+      std::size_t xa = 0, xb = 0, ea = run_end(a, 0, nx), eb = run_end(b, 0, nx);
+      while (true) {
+        if (a[xa] == b[xb]) unite(parent.data(), base[sl] + lab[i0 + xa], base[sl - 1] + lab[j0 + xb]);
+        const std::size_t e = std::min(ea, eb);
+        if (e == nx) break;
+        if (ea == e) xa = ea, ea = run_end(a, xa, nx);
+        if (eb == e) xb = eb, eb = run_end(b, xb, nx);
       }
+      if (!occupied26) continue;
+      // Occupied runs of this row also meet occupied voxels of rows y-1..y+1 below across edges
+      // and corners: one voxel wider on both sides.
+      for (std::size_t x = 0; x < nx;) {
+        const std::size_t e = run_end(a, x, nx);
+        if (a[x] == kOccupiedState) {
+          const std::uint32_t ga = base[sl] + lab[i0 + x];
+          const std::size_t lo = x > 0 ? x - 1 : 0, hi = std::min(nx, e + 1);
+          for (std::size_t yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < ny; ++yy) {
+            const std::size_t k0 = nx * (yy + ny * (z - 1));
+            for_each_run_in(s + k0, kOccupiedState, lo, hi,
+                            [&](std::size_t j) { unite(parent.data(), ga, base[sl - 1] + lab[k0 + j]); });
+          }
+        }
+        x = e;
+      }
+    }
   }
   // Final ids in order of first voxel: a component's root precedes it.
   std::vector<std::uint32_t> final_id(base[slabs]);
@@ -259,8 +313,9 @@ void label_states(const std::uint8_t* s, std::vector<std::uint8_t>* release, con
   for_each_slab(slabs, threads, [&](std::size_t sl) {
     const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab);
     // Slot of each local component: segments present in this slab, in order of first voxel.
-    std::vector<std::uint32_t> ids(final_id.begin() + base[sl], final_id.begin() + base[sl + 1]);
-    std::vector<std::uint32_t> uniq = ids;
+    const std::uint32_t* ids = final_id.data() + base[sl];
+    const std::size_t local = local_count[sl];
+    std::vector<std::uint32_t> uniq(ids, ids + local);
     std::sort(uniq.begin(), uniq.end());
     uniq.erase(std::unique(uniq.begin(), uniq.end()), uniq.end());
     std::vector<SlotStats>& out = slots[sl];
@@ -272,20 +327,18 @@ void label_states(const std::uint8_t* s, std::vector<std::uint8_t>* release, con
         out[k].hi[a] = 0;
       }
     }
-    std::vector<std::uint32_t> slot(ids.size());
-    for (std::size_t k = 0; k < ids.size(); ++k)
+    std::vector<std::uint32_t> slot(local);
+    for (std::size_t k = 0; k < local; ++k)
       slot[k] = static_cast<std::uint32_t>(std::lower_bound(uniq.begin(), uniq.end(), ids[k]) - uniq.begin());
     for (std::size_t z = zb; z < ze; ++z)
       for (std::size_t y = 0; y < ny; ++y) {
         const std::size_t i0 = nx * (y + ny * z);
         for (std::size_t x = 0; x < nx;) {
-          const std::uint32_t l = lab[i0 + x];
-          const std::size_t e = label_run_end(lab + i0, x, nx);  // a run: voxels of one component
+          const std::size_t e = next_start(starts.data(), i0 + x + 1, i0 + nx) - i0;  // a run: one component
+          const std::uint32_t l = lab[i0 + x];             // its local number
           SlotStats& t = out[slot[l]];
           std::fill(lab + i0 + x, lab + i0 + e, ids[l]);
-          double acc = t.mop;
-          for (std::size_t k = x; k < e; ++k) acc += p[i0 + k];  // scan order within the slab
-          t.mop = acc;
+          t.mop += run_sum(p + i0 + x, e - x);  // runs in scan order within the slab
           const std::uint64_t len = e - x;
           t.voxels += len;
           t.sum[0] += (static_cast<std::uint64_t>(x) + e - 1) * len / 2;

@@ -147,11 +147,67 @@ TEST(Components, StatisticsMatchTheLabelledVoxelsAndTakingStatesOverChangesNothi
     }
 }
 
-// The mean occupancy is summed per slab in scan order and the slab shares are added in slab
-// order, whichever thread finishes which slab first. Here slab 0 is expensive (random states,
-// many runs) and slabs 1..15 are one free region, so with two threads the later slabs finish
-// first. The free voxels' values span many binades (u^6 for random u), so the slab shares are
-// rounded sums; the values are drawn until adding slab 0's share last would change the sum.
+namespace {
+
+// The documented sum of one run's values: voxel k into lane k % 8, the lanes added pairwise.
+double lane_sum(const float* v, std::size_t n) {
+  double l[8] = {};
+  for (std::size_t k = 0; k < n; ++k) l[k % 8] += v[k];
+  return ((l[0] + l[1]) + (l[2] + l[3])) + ((l[4] + l[5]) + (l[6] + l[7]));
+}
+
+}  // namespace
+
+// A run (a stretch of one segment along x) is summed in eight lanes: with a 1.0 first and
+// quarter-ulp values after it, the serial sum stays 1.0 while the lanes keep the small values.
+// Runs of every length up to 40 (the vector loop and its tail), then values over many binades.
+TEST(Components, RunsAreSummedInEightLanes) {
+  for (std::size_t len = 1; len <= 40; ++len) {
+    const Dims d{len, 1, 1};
+    Grid g(d, std::ldexp(1.0f, -54));
+    g.p[0] = 1.0f;
+    std::vector<std::uint32_t> labels;
+    std::vector<Segment> segs;
+    label_components(std::vector<std::uint8_t>(len, 0), g, labels, segs, 1);
+    ASSERT_EQ(segs.size(), 1u);
+    EXPECT_EQ(segs[0].mop, lane_sum(g.p.data(), len) / double(len)) << len;
+    if (len >= 7) {  // shorter: 1 + 2t at most, which rounds back to 1.0 as well
+      double serial = 0;
+      for (float v : g.p) serial += v;
+      EXPECT_NE(segs[0].mop, serial / double(len)) << len;  // the lanes are not the serial order
+    }
+  }
+  // Three runs per row (free, occupied, free) of lengths that vary by row.
+  const Dims d{37, 5, 3};
+  Grid g(d, 0.0f);
+  std::vector<std::uint8_t> st(d.count(), 0);
+  std::uint32_t r = 11;
+  for (std::size_t i = 0; i < st.size(); ++i) {
+    r = r * 1664525u + 1013904223u;
+    g.p[i] = static_cast<float>(std::pow((r >> 8) / double(1u << 24), 6));
+    const std::size_t x = i % d.nx, row = i / d.nx;
+    st[i] = (x >= 3 + row % 4 && x < 20 + row % 7) ? 2 : 0;
+  }
+  std::vector<std::uint32_t> labels;
+  std::vector<Segment> segs;
+  label_components(st, g, labels, segs, 2);
+  std::vector<double> sum(segs.size(), 0.0);
+  for (std::size_t i0 = 0; i0 < st.size(); i0 += d.nx)
+    for (std::size_t x = 0; x < d.nx;) {
+      std::size_t e = x + 1;
+      while (e < d.nx && labels[i0 + e] == labels[i0 + x]) ++e;
+      sum[labels[i0 + x]] += lane_sum(g.p.data() + i0 + x, e - x);
+      x = e;
+    }
+  ASSERT_EQ(segs.size(), 3u);  // the occupied bar and the free space on either side of it
+  for (std::size_t k = 0; k < segs.size(); ++k) EXPECT_EQ(segs[k].mop, sum[k] / double(segs[k].voxels)) << k;
+}
+
+// The run sums are added in scan order within each slab and the slab shares in slab order,
+// whichever thread finishes which slab first. Here slab 0 is expensive (random states, many runs)
+// and slabs 1..15 are one free region, so with two threads the later slabs finish first. The free
+// voxels' values span many binades (u^6 for random u), so the slab shares are rounded sums; the
+// values are drawn until adding slab 0's share last would change the sum.
 TEST(Components, SlabSharesAreAddedInSlabOrderWhateverFinishesFirst) {
   const Dims d{64, 64, 16 * kLabelSlab};
   Grid g(d, 0.5f);
@@ -173,8 +229,13 @@ TEST(Components, SlabSharesAreAddedInSlabOrderWhateverFinishesFirst) {
                           : (st[i] == 1 ? 0.5f : 0.9f);
     double share[16] = {};
     n = 0;
-    for (std::size_t i = 0; i < st.size(); ++i)
-      if (labels[i] == big) share[i / slab0] += g.p[i], ++n;
+    for (std::size_t i0 = 0; i0 < st.size(); i0 += d.nx)  // runs of `big` along x
+      for (std::size_t x = 0; x < d.nx;) {
+        std::size_t e = x + 1;
+        while (e < d.nx && labels[i0 + e] == labels[i0 + x]) ++e;
+        if (labels[i0 + x] == big) share[i0 / slab0] += lane_sum(g.p.data() + i0 + x, e - x), n += e - x;
+        x = e;
+      }
     double zero_last = 0;
     forward = 0;
     for (int s = 0; s < 16; ++s) forward += share[s];
@@ -198,5 +259,33 @@ TEST(Components, LabelRangeIsCheckedBeforeAnythingIsAllocated) {
   } catch (const Error& e) {
     EXPECT_EQ(e.status(), Status::unsupported);
     EXPECT_NE(std::string(e.what()).find("4294967295 voxels"), std::string::npos) << e.what();
+  }
+}
+
+// Across the first plane of a slab (z = 8), rows are joined run by run. Here the runs of both
+// rows end at x = 4, where each row turns to the state the other had: the free and the occupied
+// halves touch the other plane's halves only across an edge. Six segments (6-connected), five
+// when occupied voxels join across edges (26), the free halves staying apart.
+TEST(Components, RunsEndingTogetherAcrossASlabBoundaryJoinOnlyWhatTouches) {
+  static_assert(kLabelSlab == 8, "the boundary plane below is z = 8");
+  const Dims d{8, 1, 16};
+  std::vector<std::uint8_t> st(d.count(), 1);  // unknown above and below
+  for (std::size_t x = 0; x < 8; ++x) {
+    st[x + 8 * 7] = x < 4 ? 2 : 0;  // z = 7: occupied, then free
+    st[x + 8 * 8] = x < 4 ? 0 : 2;  // z = 8: free, then occupied
+  }
+  const Grid g(d, 0.5f);
+  for (bool occ26 : {false, true}) {
+    std::vector<std::uint32_t> labels;
+    std::vector<Segment> segs;
+    label_components(st, g, labels, segs, 2, occ26);
+    const std::uint32_t o = occ26 ? 1 : 4;  // the upper occupied half: its own segment, or the lower's
+    const std::uint32_t up = occ26 ? 4 : 5;
+    const std::vector<std::uint32_t> want_z7 = {1, 1, 1, 1, 2, 2, 2, 2}, want_z8 = {3, 3, 3, 3, o, o, o, o};
+    EXPECT_EQ(std::vector<std::uint32_t>(labels.begin() + 56, labels.begin() + 64), want_z7) << occ26;
+    EXPECT_EQ(std::vector<std::uint32_t>(labels.begin() + 64, labels.begin() + 72), want_z8) << occ26;
+    EXPECT_EQ(labels[0], 0u);
+    EXPECT_EQ(labels.back(), up);
+    EXPECT_EQ(segs.size(), occ26 ? 5u : 6u);
   }
 }

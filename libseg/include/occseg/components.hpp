@@ -19,9 +19,11 @@ struct Segment {
   std::array<double, 3> centroid{0, 0, 0};         // mean voxel index (x, y, z)
 };
 
-// z-planes per labelling slab. Slabs are labelled in parallel; the mean occupancy of a segment is
-// summed in scan order within each slab and the slab sums are added in slab order, so the result
-// depends on this constant but never on the thread count (docs/performance.md).
+// z-planes per labelling slab. Slabs are labelled in parallel. The mean occupancy of a segment
+// is summed run by run (a run: a maximal stretch of the segment along x within a row): voxel k of
+// a run adds to lane k % 8, the run's sum is ((l0 + l1) + (l2 + l3)) + ((l4 + l5) + (l6 + l7)),
+// run sums are added in scan order within each slab and the slab sums in slab order. The result
+// depends on this constant but never on the thread count (docs/algorithm.md).
 constexpr std::size_t kLabelSlab = 8;
 
 // Labels each connected region of equal state 0..N-1, numbered in the order of their first
@@ -33,7 +35,7 @@ void label_components(const std::vector<std::uint8_t>& states, const Grid& grid,
                       std::vector<std::uint32_t>& labels, std::vector<Segment>& segments, int threads = 0,
                       bool occupied26 = false);
 // The same, taking the states over: they are freed (left empty) as soon as the components are
-// known, before the statistics pass, which lowers the peak memory by 1 byte per voxel.
+// known, before the statistics pass (which finds its runs in 1/8 byte per voxel of bits).
 void label_components(std::vector<std::uint8_t>&& states, const Grid& grid, std::vector<std::uint32_t>& labels,
                       std::vector<Segment>& segments, int threads = 0, bool occupied26 = false);
 
