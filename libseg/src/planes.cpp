@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "occseg/parallel.hpp"
+
 namespace occseg {
 
 namespace {
@@ -71,13 +73,20 @@ std::size_t count_inliers(const std::vector<Vec>& pts, const Plane& pl) {
 }
 
 // MSAC cost: squared distances, capped at the inlier distance. Counting inliers alone would
-// prefer a slightly tilted plane that also grazes a few voxels of the layer above it.
-double cost(const std::vector<Vec>& pts, const Plane& pl) {
+// prefer a slightly tilted plane that also grazes a few voxels of the layer above it. The terms
+// are added in point order; the sum stops growing exactly once it reaches `stop` (the terms are
+// not negative, so it could only grow further): such a plane loses to one that costs `stop`.
+double cost(const std::vector<Vec>& pts, const Plane& pl,
+            double stop = std::numeric_limits<double>::infinity()) {
   constexpr double cap = kPlaneInlierDistance * kPlaneInlierDistance;
   double c = 0;
-  for (const Vec& p : pts) {
-    const double e = pl.distance(p[0], p[1], p[2]);
-    c += std::min(e * e, cap);
+  for (std::size_t b = 0; b < pts.size(); b += 256) {
+    for (std::size_t i = b; i < std::min(pts.size(), b + 256); ++i) {
+      const Vec& p = pts[i];
+      const double e = pl.distance(p[0], p[1], p[2]);
+      c += std::min(e * e, cap);
+    }
+    if (c >= stop) break;
   }
   return c;
 }
@@ -125,32 +134,60 @@ void for_sample(std::size_t n, F&& f) {
     for (std::size_t i = 0; i < kSample; ++i) f(i * n / kSample);
 }
 
-// MSAC over the sample; false when every draw was degenerate.
-bool sample_plane(const std::vector<Vec>& sample, std::uint64_t seed, Plane& best) {
+// MSAC over the sample; false when every draw was degenerate. The draws are made first (the
+// generator's sequence does not depend on the scores) and scored in batches, in parallel over
+// `threads`; the batch's scores are then taken in draw order exactly as one at a time would, so
+// the result never depends on the thread count. A batch past the adaptive stop is wasted work,
+// not a different result.
+bool sample_plane(const std::vector<Vec>& sample, std::uint64_t seed, Plane& best, int threads = 1) {
   if (sample.size() < 3) return false;
   Rng rng{seed};
-  double best_cost = std::numeric_limits<double>::infinity();
   // At most 256 draws of 3 points: a plane holding half the points is drawn with probability
   // 1 - (7/8)^256 > 1 - 1e-14.
-  // Adaptive stop: once the best plane holds a fraction w of the sample, a better one would have
-  // been drawn with probability 1 - (1 - w^3)^k after k draws; stop when that exceeds 1 - 1e-9
-  // (13 draws for a clean plane holding 90 %, 155 for one holding half).
-  int needed = 256;
-  for (int it = 0; it < needed; ++it) {
+  constexpr int kDraws = 256;
+  struct Draw {
+    Plane h;
+    bool valid = false;  // false: a repeated or collinear draw
+    double score = 0;
+  };
+  std::vector<Draw> draws(kDraws);
+  for (Draw& dr : draws) {
     const Vec& a = sample[rng.below(sample.size())];
     const Vec& b = sample[rng.below(sample.size())];
     const Vec& c = sample[rng.below(sample.size())];
     const Vec nrm = cross(sub(b, a), sub(c, a));
     const double len = std::sqrt(dot(nrm, nrm));
-    if (len < 1e-9) continue;  // a repeated or collinear draw
-    Plane h;
-    h.n = {nrm[0] / len, nrm[1] / len, nrm[2] / len};
-    h.d = dot(h.n, a);
-    const double score = cost(sample, h);
-    if (score < best_cost) {
-      best_cost = score, best = h;
-      const double w = double(count_inliers(sample, h)) / double(sample.size());
-      if (w > 0.3) needed = std::min(256, static_cast<int>(std::ceil(std::log(1e-9) / std::log1p(-w * w * w))));
+    if (len < 1e-9) continue;
+    dr.valid = true;
+    dr.h.n = {nrm[0] / len, nrm[1] / len, nrm[2] / len};
+    dr.h.d = dot(dr.h.n, a);
+  }
+  const bool parallel = resolve_threads(threads) > 1;
+  double best_cost = std::numeric_limits<double>::infinity();
+  // Adaptive stop: once the best plane holds a fraction w of the sample, a better one would have
+  // been drawn with probability 1 - (1 - w^3)^k after k draws; stop when that exceeds 1 - 1e-9
+  // (13 draws for a clean plane holding 90 %, 155 for one holding half).
+  int needed = kDraws;
+  for (int it = 0; it < needed;) {
+    // One draw at a time on one thread; on more, 16 (a clean plane stops after 13), then all
+    // that the stop so far still asks for.
+    const int end = !parallel ? it + 1 : std::min(needed, it == 0 ? 16 : kDraws);
+    const double stop = best_cost;  // scores from `stop` up cannot win: cut short
+    const auto score = [&](std::size_t b, std::size_t e) {
+      for (std::size_t k = b; k < e; ++k)
+        if (draws[k].valid) draws[k].score = cost(sample, draws[k].h, stop);
+    };
+    if (parallel)
+      parallel_for(static_cast<std::size_t>(end - it), threads,
+                   [&](std::size_t b, std::size_t e) { score(it + b, it + e); });
+    else
+      score(static_cast<std::size_t>(it), static_cast<std::size_t>(end));
+    for (; it < end && it < needed; ++it) {
+      const Draw& dr = draws[static_cast<std::size_t>(it)];
+      if (!dr.valid || !(dr.score < best_cost)) continue;
+      best_cost = dr.score, best = dr.h;
+      const double w = double(count_inliers(sample, dr.h)) / double(sample.size());
+      if (w > 0.3) needed = std::min(kDraws, static_cast<int>(std::ceil(std::log(1e-9) / std::log1p(-w * w * w))));
     }
   }
   return std::isfinite(best_cost);
@@ -172,11 +209,12 @@ std::size_t refine_plane(const std::vector<Vec>& points, Plane& best) {
 
 }  // namespace
 
-bool fit_dominant_plane(const std::vector<Vec>& points, std::uint64_t seed, Plane& plane, std::size_t& inliers) {
+bool fit_dominant_plane(const std::vector<Vec>& points, std::uint64_t seed, Plane& plane, std::size_t& inliers,
+                        int threads) {
   inliers = 0;
   std::vector<Vec> sample;
   for_sample(points.size(), [&](std::size_t i) { sample.push_back(points[i]); });
-  if (!sample_plane(sample, seed, plane)) return false;
+  if (!sample_plane(sample, seed, plane, threads)) return false;
   inliers = refine_plane(points, plane);
   return true;
 }
@@ -186,8 +224,9 @@ namespace {
 // One pass of the split over segment `s`; state shared between its steps.
 class Splitter {
  public:
-  Splitter(const Grid& g, std::vector<std::uint32_t>& labels, std::vector<Segment>& segments, bool occupied26)
-      : g_(g), d_(g.dims), labels_(labels), segs_(segments), conn26_(occupied26) {}
+  Splitter(const Grid& g, std::vector<std::uint32_t>& labels, std::vector<Segment>& segments, bool occupied26,
+           int threads)
+      : g_(g), d_(g.dims), labels_(labels), segs_(segments), conn26_(occupied26), threads_(threads) {}
 
   // Examines segment `s`. Its voxels are [first, last) in scan order when the caller bucketed
   // them, else (first = nullptr) they are found by scanning its box.
@@ -201,7 +240,7 @@ class Splitter {
     std::uint32_t first_voxel = 0;
     collect_sample(s, first, ranks, first_voxel);
     Plane pl;
-    if (!sample_plane(pts_, 0x6F6363736567ull ^ (std::uint64_t(first_voxel) * 0x9E3779B97F4A7C15ull), pl) ||
+    if (!sample_plane(pts_, 0x6F6363736567ull ^ (std::uint64_t(first_voxel) * 0x9E3779B97F4A7C15ull), pl, threads_) ||
         10 * count_inliers(pts_, pl) < 4 * pts_.size())  // under 40 %: far from half
       return;
     list_members(s, first, last);
@@ -482,6 +521,7 @@ class Splitter {
   std::vector<std::uint32_t>& labels_;
   std::vector<Segment>& segs_;
   const bool conn26_;
+  const int threads_;  // for the plane search's scoring
   Plane plane_;
   std::vector<std::uint32_t> members_, stack_;
   std::vector<Vec> pts_;
@@ -491,7 +531,7 @@ class Splitter {
 }  // namespace
 
 void split_support_planes(const Grid& grid, std::vector<std::uint32_t>& labels, std::vector<Segment>& segments,
-                          std::size_t min_plane, bool occupied26) {
+                          std::size_t min_plane, bool occupied26, int threads) {
   if (min_plane == 0) return;
   // Candidates: occupied segments big enough for a plane and an object. Their voxels are found by
   // scanning each one's box, or, when the boxes add up to more than the map (sprawling segments
@@ -511,7 +551,7 @@ void split_support_planes(const Grid& grid, std::vector<std::uint32_t>& labels, 
     boxes += box;
     voxels += seg.voxels;
   }
-  Splitter splitter(grid, labels, segments, occupied26);
+  Splitter splitter(grid, labels, segments, occupied26, threads);
   if (boxes <= labels.size()) {
     for (std::uint32_t s : candidates) splitter.run(s, min_plane, nullptr, nullptr);
     return;

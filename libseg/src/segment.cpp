@@ -158,7 +158,7 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, st
   // Part of "labelling" for callers: it decides which connected regions are separate objects.
   if (params.preset == Preset::default_preset && params.support_plane > 0)
     split_support_planes(grid, r.labels, r.segments, static_cast<std::size_t>(params.support_plane),
-                         params.occupied_connectivity == 26);
+                         params.occupied_connectivity == 26, params.threads);
   st.end();
   return r;
 }

@@ -35,9 +35,10 @@ struct Plane {
 // capped at kPlaneInlierDistance) over at most 4096 of them (the generator is seeded with `seed`),
 // refined by least-squares fits to the inliers. `inliers` receives how many of all points are
 // within kPlaneInlierDistance of the result. Returns false for fewer than 3 points or when all
-// are collinear.
+// are collinear. Candidate planes are scored on up to `threads` threads (0: all cores); the result
+// never depends on the thread count.
 bool fit_dominant_plane(const std::vector<std::array<double, 3>>& points, std::uint64_t seed, Plane& plane,
-                        std::size_t& inliers);
+                        std::size_t& inliers, int threads = 1);
 
 // Splits every occupied segment with at least `min_plane` voxels whose dominant plane holds at
 // least `min_plane` of them and at least half of them. Pieces of the rest (connected as
@@ -49,9 +50,10 @@ bool fit_dominant_plane(const std::vector<std::array<double, 3>>& points, std::u
 // segment, whose first component keeps its id (further components get new ids too, or join the
 // object they touch when smaller than kMinObjectVoxels). A segment whose best plane holds under
 // 40 % of a 4096-voxel sample is dropped before its voxels are listed. Statistics of changed
-// segments are recomputed. Runs on one thread, segment by segment, so results never depend on
-// the thread count.
+// segments are recomputed. Segments are examined one after the other; the plane search of each
+// scores its candidate planes on up to `threads` threads (0: all cores), and results never
+// depend on the thread count.
 void split_support_planes(const Grid& grid, std::vector<std::uint32_t>& labels, std::vector<Segment>& segments,
-                          std::size_t min_plane, bool occupied26);
+                          std::size_t min_plane, bool occupied26, int threads = 1);
 
 }  // namespace occseg
