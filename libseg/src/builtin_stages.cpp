@@ -46,8 +46,9 @@ TextureMap lbp6_native(const Grid& grid, const Params& params) {
   return compute_texture(grid, params.contrast_bins, params.threads);
 }
 
-int lbp6_native_into(const Grid& grid, const Params& params, std::uint16_t* codes) {
-  detail::compute_texture_into(grid, params.contrast_bins, params.threads, reinterpret_cast<detail::code_t*>(codes));
+int lbp6_native_into(const Grid& grid, const Params& params, std::uint16_t* codes, std::uint8_t* scratch) {
+  detail::compute_texture_into(grid, params.contrast_bins, params.threads, reinterpret_cast<detail::code_t*>(codes),
+                               scratch);
   return 64 * params.contrast_bins;
 }
 

@@ -16,8 +16,11 @@ namespace occseg::detail {
 typedef std::uint16_t __attribute__((__may_alias__)) code_t;
 
 // compute_texture() writing the codes into `codes` (grid.dims.count() entries) instead of a
-// fresh array. Same codes, same errors.
-void compute_texture_into(const Grid& grid, int contrast_bins, int threads, code_t* codes);
+// fresh array. Same codes, same errors. With `lbp_scratch` (grid.dims.count() bytes, any
+// storage), the first pass parks the LBP codes there and the second reads them instead of the
+// map.
+void compute_texture_into(const Grid& grid, int contrast_bins, int threads, code_t* codes,
+                          std::uint8_t* lbp_scratch = nullptr);
 
 // divide() on codes in any storage: `code_count` distinct codes (TextureMap::code_count()).
 std::vector<Block> divide_codes(const Grid& grid, const code_t* codes, int code_count, const Params& params);

@@ -279,7 +279,7 @@ struct Divider {
       run(kids[0], size / 2, leaves, s);
       return;
     }
-    Child* used[8];
+    Child* used[8] = {};  // the first nu are set (GCC cannot tell and warns)
     std::size_t nu = 0;
     for (int k = 0; k < nk; ++k) {
       histogram(kids[k], s.kids[k]);
@@ -364,7 +364,7 @@ struct Divider {
       run_tree(t, nd.first, leaves);
       return;
     }
-    Child* used[8];
+    Child* used[8] = {};  // the first nu are set (GCC cannot tell and warns)
     std::size_t nu = 0;
     for (int k = 0; k < nd.nk; ++k) {
       Child& c = child(t, nd.first + static_cast<std::size_t>(k));

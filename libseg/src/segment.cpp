@@ -111,7 +111,8 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, st
   Stages st(params, r);
 
   // The label array holds the stages' per-voxel scratch until the labelling writes the labels:
-  // the texture codes (2 bytes per voxel) through the division, then the own states (1 byte)
+  // the texture codes (2 bytes per voxel, with the texture's LBP codes in a third byte while it
+  // runs) through the division, then the own states (1 byte)
   // through the refinement, beside the default rules' bit masks. It is allocated (or recycled)
   // once and paged in once; separate arrays cost three more allocations, zero-fills and page-ins
   // (docs/performance.md, "Fourth round"). Peak: the labels and the states (5 bytes per voxel),
@@ -122,7 +123,9 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, st
   st.begin("texture");
   if (op && op->native_into) {
     resize_huge(r.labels, n);
-    const int codes = op->native_into(grid, params, reinterpret_cast<std::uint16_t*>(r.labels.data()));
+    // codes in bytes [0, 2n), the operator's scratch (LBP codes) in [2n, 3n)
+    std::uint8_t* const bytes = reinterpret_cast<std::uint8_t*>(r.labels.data());
+    const int codes = op->native_into(grid, params, reinterpret_cast<std::uint16_t*>(bytes), bytes + 2 * n);
     st.begin("division");
     blocks = detail::divide_codes(grid, reinterpret_cast<const detail::code_t*>(r.labels.data()), codes, params);
   } else {  // a plugin's codes come in their own array: the label array waits for it to go

@@ -157,8 +157,10 @@ void lbp_row_3d(const float* p, const std::ptrdiff_t* off, std::size_t n, std::u
 // double contrast, and c +- 1e-6 (each bound rounded by at most 6e-8) still encloses it. So the
 // sure steps are texture_unit()'s, as are the kRecheck voxels', whichever kernel ran. No FMA in
 // the interval itself: it would change the rounding the bound accounts for.
+//
+// With `lbp` (else nullptr), the voxels' LBP codes go there too, from the same comparisons.
 __attribute__((target("avx2"))) void contrast_row_avx2(const float* p, const std::ptrdiff_t* off, std::size_t n,
-                                                       detail::code_t* out) {
+                                                       detail::code_t* out, std::uint8_t* lbp = nullptr) {
   const __m256 zero = _mm256_setzero_ps(), err = _mm256_set1_ps(1e-6f);
   const __m256 fine = _mm256_set1_ps(static_cast<float>(ContrastQuantizer::kFine));
   const __m256i top = _mm256_set1_epi32(ContrastQuantizer::kFine - 1), recheck = _mm256_set1_epi32(kRecheck);
@@ -174,9 +176,13 @@ __attribute__((target("avx2"))) void contrast_row_avx2(const float* p, const std
     // of six, so the chains of successive steps overlap (the error bound holds for any order).
     __m256 s1[3], s0[3];
     __m256i up_count = _mm256_setzero_si256();  // neighbours >= centre; the other 6 - count are below
+    __m256i bits = _mm256_setzero_si256();      // the LBP codes
     for (int k = 0; k < 3; ++k) {
       const __m256 v = _mm256_loadu_ps(p + x + o[2 * k]), w = _mm256_loadu_ps(p + x + o[2 * k + 1]);
       const __m256 vu = _mm256_cmp_ps(v, c, _CMP_GE_OQ), wu = _mm256_cmp_ps(w, c, _CMP_GE_OQ);
+      if (lbp)
+        bits = _mm256_or_si256(bits, _mm256_or_si256(_mm256_and_si256(_mm256_castps_si256(vu), _mm256_set1_epi32(1 << (2 * k))),
+                                                     _mm256_and_si256(_mm256_castps_si256(wu), _mm256_set1_epi32(2 << (2 * k)))));
       s1[k] = _mm256_add_ps(_mm256_and_ps(vu, v), _mm256_and_ps(wu, w));
       s0[k] = _mm256_add_ps(_mm256_andnot_ps(vu, v), _mm256_andnot_ps(wu, w));
       // a true compare is -1
@@ -199,8 +205,14 @@ __attribute__((target("avx2"))) void contrast_row_avx2(const float* p, const std
     // 32 -> 16 bits (values <= 0xFFFF): packus works per 128-bit half, the permute restores order.
     const __m256i packed = _mm256_permute4x64_epi64(_mm256_packus_epi32(res, res), 0x08);
     _mm_storeu_si128(reinterpret_cast<__m128i*>(out + x), _mm256_castsi256_si128(packed));
+    if (lbp) {  // 32 -> 16 -> 8 bits, in order as above
+      const __m256i b16 = _mm256_permute4x64_epi64(_mm256_packus_epi32(bits, bits), 0x08);
+      const __m128i b8 = _mm_packus_epi16(_mm256_castsi256_si128(b16), _mm256_castsi256_si128(b16));
+      _mm_storel_epi64(reinterpret_cast<__m128i*>(lbp + x), b8);
+    }
   }
   contrast_row_impl<63>(p + x, off, n - x, out + x);
+  if (lbp) lbp_row_impl<63>(p + x, off, n - x, lbp + x);
 }
 
 // Pass 2 for 8 voxels per step, in place: row[x] = lbp * bins + level, from the parked step
@@ -410,7 +422,8 @@ TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads) {
   return tm;
 }
 
-void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threads, code_t* codes) {
+void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threads, code_t* codes,
+                                  std::uint8_t* lbp_scratch) {
   check_contrast_bins(contrast_bins);
   const Dims& d = grid.dims;
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz;
@@ -447,7 +460,19 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
           }
           std::fill(row, row + x0, kNoTexture);
           std::fill(row + x1, row + nx, kNoTexture);
-          contrast_any<0>(p + nx * (y + ny * z) + x0, sten.off, x1 - x0, row + x0, sten.present);
+          const float* prow0 = p + nx * (y + ny * z) + x0;
+          // With scratch, the LBP codes now, from the contrast kernel's own comparisons: pass 2
+          // then reads 3 bytes per voxel instead of the map's rows again.
+          std::uint8_t* lrow = lbp_scratch ? lbp_scratch + nx * (y + ny * z) + x0 : nullptr;
+#ifdef OCCSEG_TEXTURE_AVX2
+          if (sten.present == 63 && use_avx2_kernel()) {
+            contrast_row_avx2(prow0, sten.off, x1 - x0, row + x0, lrow);
+          } else
+#endif
+          {
+            contrast_any<0>(prow0, sten.off, x1 - x0, row + x0, sten.present);
+            if (lrow) lbp_any<0>(prow0, sten.off, x1 - x0, lrow, sten.present);
+          }
           if (any_recheck(row + x0, x1 - x0)) {
             const float* prow = p + nx * (y + ny * z);
             for (std::size_t x = x0; x < x1; ++x)
@@ -487,6 +512,19 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
     std::vector<std::uint16_t> lvl(nx);
     for (std::size_t z = z0; z < z1; ++z)
       for (std::size_t y = 0; y < ny; ++y) {
+        if (lbp_scratch) {  // the LBP codes are there: no map reads
+          std::size_t x0 = 0, x1 = 0;
+          if (!interior_row(d, y, z, x0, x1)) continue;
+          const std::size_t at = nx * (y + ny * z) + x0, n = x1 - x0;
+          detail::code_t* row = codes + at;
+          if (by_compares) {
+            levels_row(row, n, rises.data(), rises.size(), lvl.data());
+          } else {
+            for (std::size_t x = 0; x < n; ++x) lvl[x] = level[row[x]];
+          }
+          combine_row(lbp_scratch + at, lvl.data(), n, static_cast<std::uint16_t>(contrast_bins), row);
+          continue;
+        }
         if (z + 2 < nz) prefetch_row(p + nx * (y + ny * (z + 2)), nx * sizeof(float));
         std::size_t x0 = 0, x1 = 0;
         if (!interior_row(d, y, z, x0, x1)) continue;

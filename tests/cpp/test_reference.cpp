@@ -9,6 +9,7 @@
 
 #include "occseg/segment.hpp"
 #include "occseg/texture.hpp"
+#include "codes_internal.hpp"
 #include "random_maps.hpp"
 #include "reference/reference.hpp"
 
@@ -60,6 +61,12 @@ TEST(Reference, TextureCodesMatch) {
       const TextureMap ref = reference::texture(g, 8);
       for (int t : {1, 2, 3})
         EXPECT_EQ(compute_texture(g, 8, t).codes, ref.codes) << "seed " << c.seed << " kernel " << vector_kernel;
+      // The pipeline's way: codes into caller storage, the LBP codes parked in scratch between
+      // the passes (dirty storage: every interior voxel's entries must be written).
+      std::vector<std::uint16_t> codes(g.p.size(), 0x1234);
+      std::vector<std::uint8_t> scratch(g.p.size(), 0xA5);
+      detail::compute_texture_into(g, 8, 2, codes.data(), scratch.data());
+      EXPECT_EQ(codes, ref.codes) << "seed " << c.seed << " kernel " << vector_kernel << " with scratch";
       EXPECT_EQ(compute_texture(g, 5, 2).codes, reference::texture(g, 5).codes) << "seed " << c.seed;
     }
   }

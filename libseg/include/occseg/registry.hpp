@@ -31,9 +31,10 @@ struct TextureOperator {
   // check to an operator that has one, and checks the map first for the others.
   TextureMap (*native)(const Grid& grid, const Params& params) = nullptr;
   // Built-in operators only, optional: `native` writing the codes into caller storage of
-  // grid.dims.count() codes instead of a fresh array; returns the number of distinct codes.
-  // segment() keeps them in the label array, which it allocates anyway (docs/performance.md).
-  int (*native_into)(const Grid& grid, const Params& params, std::uint16_t* codes) = nullptr;
+  // grid.dims.count() codes instead of a fresh array, with grid.dims.count() bytes of `scratch`
+  // it may use meanwhile (or nullptr); returns the number of distinct codes. segment() keeps
+  // both in the label array, which it allocates anyway (docs/performance.md).
+  int (*native_into)(const Grid& grid, const Params& params, std::uint16_t* codes, std::uint8_t* scratch) = nullptr;
 };
 
 struct Similarity {
