@@ -283,7 +283,14 @@ void label_states(const std::uint8_t* s, std::vector<std::uint8_t>* release, con
 
   // The segment table, filled slab by slab in slab order below.
   segments.assign(count, Segment());
-  std::vector<std::array<std::uint64_t, 3>> sums(count, {0, 0, 0});
+  // Each segment's integer coordinate sums are kept in the bits of its centroid until the means
+  // are taken: a separate array of them was 0.3 byte per voxel at the peak on a noisy map (166,000
+  // segments). The centroid's doubles start as 0.0, whose bits are the integer 0.
+  auto coordinate_sum = [](Segment& seg, int a) -> std::uint64_t {
+    std::uint64_t v;
+    std::memcpy(&v, &seg.centroid[a], sizeof v);
+    return v;
+  };
   for (std::uint32_t k = 0; k < count; ++k) {
     segments[k].id = k;
     segments[k].state = static_cast<State>(state_of[k]);
@@ -297,7 +304,8 @@ void label_states(const std::uint8_t* s, std::vector<std::uint8_t>* release, con
       for (int a = 0; a < 3; ++a) {
         seg.bbox_min[a] = std::min(seg.bbox_min[a], t.lo[a]);
         seg.bbox_max[a] = std::max(seg.bbox_max[a], t.hi[a]);
-        sums[t.id][a] += t.sum[a];
+        const std::uint64_t sum = coordinate_sum(seg, a) + t.sum[a];
+        std::memcpy(&seg.centroid[a], &sum, sizeof sum);
       }
     }
   };
@@ -367,7 +375,7 @@ void label_states(const std::uint8_t* s, std::vector<std::uint8_t>* release, con
     const double v = static_cast<double>(seg.voxels);
     seg.mop /= v;
     // Integer coordinate sums are exact; the double sum they replace was exact below 2^53.
-    for (int a = 0; a < 3; ++a) seg.centroid[a] = static_cast<double>(sums[k][a]) / v;
+    for (int a = 0; a < 3; ++a) seg.centroid[a] = static_cast<double>(coordinate_sum(seg, a)) / v;
   }
 }
 
