@@ -54,8 +54,15 @@ std::vector<std::uint8_t> create_segments_and_own_states(const Grid& grid, const
 void refine_unknown(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& dims, const Params& params);
 void refine_boundaries(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& dims,
                        const Params& params);
-// refine_unknown() then refine_boundaries(), with sweeps of both fused where they can be.
-void refine(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& dims, const Params& params);
+// The unknown growth of refine_unknown() on bit masks (unknown_growth.cpp), kept in `scratch`
+// (8-byte aligned) when it has grow_unknown_scratch_bytes(), else in an array of its own.
+std::size_t grow_unknown_scratch_bytes(const Dims& dims);
+void grow_unknown(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& dims, int threads,
+                  std::uint8_t* scratch, std::size_t scratch_bytes);
+
+// refine_unknown() then refine_boundaries(), the masks of the first in `scratch` if it has room.
+void refine(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& dims, const Params& params,
+            std::uint8_t* scratch, std::size_t scratch_bytes);
 void apply_voxel_rules(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& dims,
                        const Params& params, std::uint8_t* scratch, std::size_t scratch_bytes);
 

@@ -18,7 +18,6 @@ const ScanDirection kSixDirections[6] = {{0, +1}, {0, -1}, {1, +1}, {1, -1}, {2,
 namespace {
 
 constexpr std::uint8_t kFree = static_cast<std::uint8_t>(State::free);
-constexpr std::uint8_t kUnknown = static_cast<std::uint8_t>(State::unknown);
 constexpr std::uint8_t kOccupied = static_cast<std::uint8_t>(State::occupied);
 constexpr int kMaxLook = 64;  // params.lookahead's upper bound
 
@@ -43,16 +42,6 @@ inline bool is_boundary(std::uint8_t a, std::uint8_t s) {
 
 // ---- vector tests: is there anything to do in these n voxels? ----
 
-// Some cur[x] free at 0.5 (own unknown) right after an unknown prev[x].
-__attribute__((target_clones("avx2", "default")))
-bool any_unknown_seed(const std::uint8_t* __restrict prev, const std::uint8_t* __restrict cur,
-                      const std::uint8_t* __restrict own, std::size_t n) {
-  std::uint8_t any = 0;
-  for (std::size_t x = 0; x < n; ++x)
-    any |= static_cast<std::uint8_t>((prev[x] == kUnknown) & (cur[x] == kFree) & (own[x] == kUnknown));
-  return any != 0;
-}
-
 // Some free/occupied pair a[x], b[x] (states are 0..2, so only those two differ by xor 2).
 __attribute__((target_clones("avx2", "default")))
 bool any_boundary(const std::uint8_t* __restrict a, const std::uint8_t* __restrict b, std::size_t n) {
@@ -62,20 +51,6 @@ bool any_boundary(const std::uint8_t* __restrict a, const std::uint8_t* __restri
 }
 
 // ---- scans along x: one row at a time, rows without any candidate skipped by a vector test ----
-
-void unknown_row(std::uint8_t* st, const std::uint8_t* own, std::size_t len, int step) {
-  if (len < 2) return;
-  // A row changes only if some free voxel at 0.5 follows an unknown one in scan order.
-  const bool any = step > 0 ? any_unknown_seed(st, st + 1, own + 1, len - 1) : any_unknown_seed(st + 1, st, own, len - 1);
-  if (!any) return;
-  if (step > 0) {
-    for (std::size_t k = 1; k < len; ++k)
-      if (st[k - 1] == kUnknown && st[k] == kFree && own[k] == kUnknown) st[k] = kUnknown;
-  } else {
-    for (std::size_t k = len - 1; k-- > 0;)
-      if (st[k + 1] == kUnknown && st[k] == kFree && own[k] == kUnknown) st[k] = kUnknown;
-  }
-}
 
 // Scan position of the next free/occupied boundary at or after scan position k (k >= 1) of a row
 // of len voxels scanned forward (step > 0: pair st[k-1], st[k]) or backward (pair st[j+1], st[j]
@@ -140,29 +115,6 @@ inline std::size_t plane_base(const Dims& d, int axis, std::size_t o) { return a
 inline Plane plane_shape(const Dims& d, int axis) {
   return axis == 1 ? Plane{d.ny, static_cast<std::ptrdiff_t>(d.nx)} : Plane{d.nz, static_cast<std::ptrdiff_t>(d.nx * d.ny)};
 }
-
-__attribute__((target_clones("avx2", "default")))
-void unknown_step_rows(const std::uint8_t* __restrict prev, std::uint8_t* __restrict cur,
-                       const std::uint8_t* __restrict own, std::size_t n) {
-  for (std::size_t x = 0; x < n; ++x) {
-    const bool grow = (prev[x] == kUnknown) & (cur[x] == kFree) & (own[x] == kUnknown);
-    cur[x] = grow ? kUnknown : cur[x];
-  }
-}
-
-void unknown_plane(std::uint8_t* st, const std::uint8_t* own, std::size_t nx, Plane pl, int step) {
-  for (std::size_t k = 1; k < pl.rows; ++k) {
-    const std::size_t r = step > 0 ? k : pl.rows - 1 - k;
-    const std::size_t q = step > 0 ? k - 1 : pl.rows - k;
-    const std::uint8_t* prev = st + static_cast<std::ptrdiff_t>(q) * pl.row;
-    std::uint8_t* cur = st + static_cast<std::ptrdiff_t>(r) * pl.row;
-    const std::uint8_t* ocur = own + static_cast<std::ptrdiff_t>(r) * pl.row;
-    // Most rows have nothing to grow: testing first leaves their cache lines clean, so they are
-    // not written back to memory (four such sweeps per call).
-    if (any_unknown_seed(prev, cur, ocur, nx)) unknown_step_rows(prev, cur, ocur, nx);
-  }
-}
-
 
 // Starts the window of lane x at row k of a plane scan; returns the lane's new skip count. A
 // window that writes occupied voxels marks their rows in `occ` (the flag of row k + w is
@@ -250,10 +202,10 @@ bool any_occupied(const std::uint8_t* s, std::size_t n) {
   return any != 0;
 }
 
-// One refinement step: the forward and the backward scan of every line along `axis` (unknown
-// growth, or free/occupied boundaries with windows of `look` voxels).
+// One refinement step: the forward and the backward scan of every line along `axis` for
+// free/occupied boundaries, with windows of `look` voxels. (The unknown growth runs on bit masks:
+// unknown_growth.cpp.)
 struct Sweep {
-  bool unknown;
   int axis;
 };
 
@@ -266,29 +218,23 @@ struct Sweep {
 // Consecutive sweeps along x and y run plane by plane (z fixed), and consecutive sweeps along z
 // and x slice by slice (y fixed): the lines of both axes lie inside that plane, so a plane's x
 // sweep followed by its y sweep reads and writes exactly what the whole x sweep followed by the
-// whole y sweep would. The default call's nine sweeps (unknown x y z, two boundary passes x y z)
-// read the map six times instead of nine (docs/performance.md, "Fifth round").
+// whole y sweep would. The default call's six sweeps (two passes x y z) read the map four times
+// instead of six (docs/performance.md, "Fifth round").
 void run_sweeps(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& d, int threads, int look,
                 const std::vector<Sweep>& sweeps) {
   std::uint8_t* const st = states.data();
   // Per row of voxels (row r: y = r % ny, z = r / ny): may hold an occupied voxel. Set from the
-  // states before the first boundary sweep (unknown sweeps only turn free voxels unknown) and kept
-  // by the boundary windows that write occupied voxels; x rows are written only where they held
-  // one already.
+  // states with the first group of sweeps and kept by the windows that write occupied voxels; x
+  // rows are written only where they held one already.
   std::vector<std::uint8_t> occ(d.ny * d.nz, 0);
   bool occ_ready = false;
-  const auto row = [&](const Sweep& s, std::size_t first, int step) {
-    if (s.unknown)
-      unknown_row(st + first, own + first, d.nx, step);
-    else if (occ[first / d.nx])
-      boundary_row(st + first, own + first, d.nx, step, look);
+  const auto row = [&](std::size_t first, int step) {
+    if (occ[first / d.nx]) boundary_row(st + first, own + first, d.nx, step, look);
   };
   const auto plane = [&](const Sweep& s, std::size_t o, std::uint8_t* lane, int step) {
     const Plane pl = plane_shape(d, s.axis);
     const std::size_t base = plane_base(d, s.axis, o);
-    if (s.unknown)
-      unknown_plane(st + base, own + base, d.nx, pl, step);
-    else if (s.axis == 1)  // rows y of plane z = o
+    if (s.axis == 1)  // rows y of plane z = o
       boundary_plane(st + base, own + base, d.nx, pl, step, look, lane, occ.data() + d.ny * o, 1);
     else  // rows z of slice y = o
       boundary_plane(st + base, own + base, d.nx, pl, step, look, lane, occ.data() + o,
@@ -299,15 +245,13 @@ void run_sweeps(std::vector<std::uint8_t>& states, const std::uint8_t* own, cons
     // runs by planes.
     int other = sweeps[g].axis;
     std::size_t e = g;
-    bool boundary = false;
     while (e < sweeps.size() && (sweeps[e].axis == 0 || other == 0 || sweeps[e].axis == other)) {
       if (sweeps[e].axis != 0) other = sweeps[e].axis;
-      boundary = boundary || !sweeps[e].unknown;
       ++e;
     }
     if (other == 0) other = 1;
     const bool by_z = other == 1;  // planes of fixed z, else slices of fixed y
-    const bool flag_rows = boundary && !occ_ready;
+    const bool flag_rows = !occ_ready;
     // the rows of plane z = o (by_z) or of slice y = o: `rows` rows of nx voxels, `stride` apart
     const std::size_t rows = by_z ? d.ny : d.nz, stride = by_z ? d.nx : d.nx * d.ny;
     parallel_for_dynamic(by_z ? d.nz : d.ny, threads, [&](std::size_t o0, std::size_t o1) {
@@ -323,8 +267,8 @@ void run_sweeps(std::vector<std::uint8_t>& states, const std::uint8_t* own, cons
           const Sweep& s = sweeps[k];
           if (s.axis == 0) {
             for (std::size_t r = 0; r < rows; ++r) {
-              row(s, first + r * stride, +1);
-              row(s, first + r * stride, -1);
+              row(first + r * stride, +1);
+              row(first + r * stride, -1);
             }
           } else {
             plane(s, o, lane.data(), +1);
@@ -338,12 +282,10 @@ void run_sweeps(std::vector<std::uint8_t>& states, const std::uint8_t* own, cons
   }
 }
 
-std::vector<Sweep> unknown_sweeps() { return {{true, 0}, {true, 1}, {true, 2}}; }  // x, y, z
-
 std::vector<Sweep> boundary_sweeps(const Params& params) {
   std::vector<Sweep> s;
   for (int pass = 0; pass < params.refine_passes; ++pass)
-    for (int axis = 0; axis < 3; ++axis) s.push_back({false, axis});
+    for (int axis = 0; axis < 3; ++axis) s.push_back({axis});
   return s;
 }
 
@@ -375,7 +317,7 @@ std::vector<std::uint8_t> own_states(const Grid& g, const Params& params) {
 
 void detail::refine_unknown(std::vector<std::uint8_t>& st, const std::uint8_t* own, const Dims& d,
                             const Params& params) {
-  run_sweeps(st, own, d, params.threads, lookahead_of(params), unknown_sweeps());  // x+, x-, y+, y-, z+, z-
+  grow_unknown(st, own, d, params.threads, nullptr, 0);  // x+, x-, y+, y-, z+, z-
 }
 
 void refine_unknown(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
@@ -388,10 +330,10 @@ void detail::refine_boundaries(std::vector<std::uint8_t>& st, const std::uint8_t
   run_sweeps(st, own, d, params.threads, lookahead_of(params), boundary_sweeps(params));
 }
 
-void detail::refine(std::vector<std::uint8_t>& st, const std::uint8_t* own, const Dims& d, const Params& params) {
-  std::vector<Sweep> sweeps = unknown_sweeps();
-  for (const Sweep& s : boundary_sweeps(params)) sweeps.push_back(s);
-  run_sweeps(st, own, d, params.threads, lookahead_of(params), sweeps);
+void detail::refine(std::vector<std::uint8_t>& st, const std::uint8_t* own, const Dims& d, const Params& params,
+                    std::uint8_t* scratch, std::size_t scratch_bytes) {
+  grow_unknown(st, own, d, params.threads, scratch, scratch_bytes);
+  run_sweeps(st, own, d, params.threads, lookahead_of(params), boundary_sweeps(params));
 }
 
 void refine_boundaries(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,

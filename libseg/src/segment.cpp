@@ -144,15 +144,15 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, st
     r.created_states = states;
   }
   st.begin("refinement");
-  detail::refine(states, own, grid.dims, params);
-  if (params.preset == Preset::default_preset) {
-    // The rest of the label array (3 bytes per voxel, from an 8-byte boundary) takes the rules'
-    // bit masks: allocated apart, they raised the peak by 0.25 byte per voxel.
-    // (Tiny maps have no room past the own states: 1 voxel is 4 bytes, and the masks start at 8.)
-    const std::size_t skip = (n + 7) / 8 * 8, bytes = r.labels.size() * sizeof(std::uint32_t);
-    const std::size_t room = bytes > skip ? bytes - skip : 0;
+  // The rest of the label array (3 bytes per voxel, from an 8-byte boundary) takes the unknown
+  // growth's bit masks, then the rules': allocated apart, they raised the peak by 0.25 byte per
+  // voxel. (Tiny maps have no room past the own states: 1 voxel is 4 bytes, and the masks start
+  // at 8.)
+  const std::size_t skip = (n + 7) / 8 * 8, bytes = r.labels.size() * sizeof(std::uint32_t);
+  const std::size_t room = bytes > skip ? bytes - skip : 0;
+  detail::refine(states, own, grid.dims, params, room ? own + skip : nullptr, room);
+  if (params.preset == Preset::default_preset)
     detail::apply_voxel_rules(states, own, grid.dims, params, room ? own + skip : nullptr, room);
-  }
   release_freed_memory();
   st.begin("labelling");
   // The states go in: they are freed inside, before the segment statistics.

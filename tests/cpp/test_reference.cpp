@@ -7,9 +7,11 @@
 #include <cmath>
 #include <cstring>
 
+#include "occseg/refine.hpp"
 #include "occseg/segment.hpp"
 #include "occseg/texture.hpp"
 #include "codes_internal.hpp"
+#include "own_states_internal.hpp"
 #include "random_maps.hpp"
 #include "reference/reference.hpp"
 
@@ -132,4 +134,51 @@ TEST(Reference, ContrastsOnStepBoundariesMatch) {
       EXPECT_EQ(compute_texture(g, bins, 2).codes, reference::texture(g, bins).codes) << bins << " " << vector_kernel;
   }
   detail::set_vector_texture(true);
+}
+
+// The unknown growth on bit masks against the reference's six byte scans, on random per-voxel
+// states (runs of candidates start and end anywhere, also across 64-voxel words and at the row
+// ends), rows of 1 to 200 voxels, any thread count, masks in dirty caller storage or their own.
+TEST(Reference, UnknownGrowthMatchesOnRandomStates) {
+  const Dims dims[] = {{1, 1, 50}, {63, 3, 4}, {64, 5, 3}, {65, 4, 6}, {130, 3, 3}, {200, 7, 5}, {129, 1, 1}};
+  std::uint64_t seed = 1;
+  for (const Dims& d : dims)
+    for (int round = 0; round < 4; ++round) {
+      test::Rng r(seed++);
+      Grid g(d, 0.5f);
+      std::vector<std::uint8_t> st(d.count());
+      const double half = 0.3 + 0.2 * round;  // share of voxels at 0.5
+      for (std::size_t i = 0; i < st.size(); ++i) {
+        const double u = r.uniform();
+        g.p[i] = u < half ? 0.5f : (u < (1 + half) / 2 ? 0.2f : 0.9f);
+        const double v = r.uniform();
+        st[i] = v < 0.55 ? 0 : (v < 0.85 ? 1 : 2);
+      }
+      if (round == 3 && d.nx == 200) {  // one run of candidates through four words, each way
+        std::fill(g.p.begin(), g.p.end(), 0.5f);
+        std::fill(st.begin(), st.end(), 2);          // occupied: no growth along y or z
+        std::fill(st.begin(), st.begin() + 200, 0);  // rows 0 and 2: candidates
+        std::fill(st.begin() + 400, st.begin() + 600, 0);
+        st[0] = 1;    // row 0: grows up from x = 0 to 199
+        st[599] = 1;  // row 2: grows down from x = 199 to 0
+      }
+      std::vector<std::uint8_t> want = st;
+      reference::refine_unknown(want, g, Params());
+      for (int threads : {1, 3}) {
+        Params p;
+        p.threads = threads;
+        std::vector<std::uint8_t> got = st;
+        refine_unknown(got, g, p);
+        EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " threads " << threads;
+        if (round == 3 && d.nx == 200)  // both rows wholly unknown
+          EXPECT_EQ(std::count(got.begin(), got.begin() + 200, 1) + std::count(got.begin() + 400, got.begin() + 600, 1),
+                    400);
+        std::vector<std::uint64_t> scratch(detail::grow_unknown_scratch_bytes(d) / 8 + 1, 0xA5A5A5A5A5A5A5A5ull);
+        got = st;
+        const std::vector<std::uint8_t> own = own_states(g, p);
+        detail::grow_unknown(got, own.data(), d, threads, reinterpret_cast<std::uint8_t*>(scratch.data()),
+                             scratch.size() * 8);
+        EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " in scratch";
+      }
+    }
 }

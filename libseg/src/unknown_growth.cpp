@@ -1,0 +1,188 @@
+// The unknown growth of the refinement (section 3.3's scans for unknown voxels) on bit masks.
+//
+// The six scans only ever turn "candidates" (voxels the texture calls free whose own value is in
+// the band, own state unknown) into unknown voxels, along each line in scan order: x+, x-, y+, y-,
+// z+, z-. Two bits per voxel say all there is: W (state unknown) and C (candidate), 64 voxels of
+// a row per word. Along x a scan fills each run of candidates next to an unknown voxel (an
+// addition carries through the run, or a search finds its start); along y and z a row takes
+// W[k] |= W[k-1] & C[k] from the row before it, 64 lanes at once. The byte scans this replaces
+// read each row six times per direction to find the few rows with anything to do (5.5 of the
+// scene's 13.5 ms of refinement; docs/performance.md, "Fifth round").
+#include <algorithm>
+#include <cstring>
+
+#include "occseg/parallel.hpp"
+#include "own_states_internal.hpp"
+
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
+namespace occseg::detail {
+
+namespace {
+
+constexpr std::uint8_t kFree = static_cast<std::uint8_t>(State::free);
+constexpr std::uint8_t kUnknown = static_cast<std::uint8_t>(State::unknown);
+
+// The masks may live in storage of another type (the label array): word_t may alias it.
+typedef std::uint64_t __attribute__((__may_alias__)) word_t;
+
+// W and C of one row of voxels (bits past nx stay 0).
+void pack_row(const std::uint8_t* st, const std::uint8_t* own, std::size_t nx, word_t* w, word_t* c) {
+  const std::size_t words = (nx + 63) / 64;
+  std::fill(w, w + words, 0);
+  std::fill(c, c + words, 0);
+  std::size_t x = 0;
+#ifdef __SSE2__
+  const __m128i unknown = _mm_set1_epi8(static_cast<char>(kUnknown)), free = _mm_set1_epi8(static_cast<char>(kFree));
+  for (; x + 16 <= nx; x += 16) {
+    const __m128i s = _mm_loadu_si128(reinterpret_cast<const __m128i*>(st + x));
+    const __m128i o = _mm_loadu_si128(reinterpret_cast<const __m128i*>(own + x));
+    const auto mw = static_cast<std::uint64_t>(static_cast<unsigned>(_mm_movemask_epi8(_mm_cmpeq_epi8(s, unknown))));
+    const auto mc = static_cast<std::uint64_t>(static_cast<unsigned>(
+        _mm_movemask_epi8(_mm_and_si128(_mm_cmpeq_epi8(s, free), _mm_cmpeq_epi8(o, unknown)))));
+    w[x / 64] |= mw << (x % 64);
+    c[x / 64] |= mc << (x % 64);
+  }
+#endif
+  for (; x < nx; ++x) {
+    w[x / 64] |= static_cast<std::uint64_t>(st[x] == kUnknown) << (x % 64);
+    c[x / 64] |= static_cast<std::uint64_t>(st[x] == kFree && own[x] == kUnknown) << (x % 64);
+  }
+}
+
+// st[x] = unknown where bit x of w is set (a grown candidate, or a voxel unknown already).
+void unpack_row(const word_t* w, std::size_t nx, std::uint8_t* st) {
+  std::size_t x = 0;
+#ifdef __SSE2__
+  const __m128i sel = _mm_setr_epi8(1, 2, 4, 8, 16, 32, 64, -128, 1, 2, 4, 8, 16, 32, 64, -128);
+  const __m128i unknown = _mm_set1_epi8(static_cast<char>(kUnknown));
+  for (; x + 16 <= nx; x += 16) {
+    const auto b = static_cast<std::uint16_t>(w[x / 64] >> (x % 64));
+    const __m128i spread = _mm_set_epi64x(static_cast<long long>((b >> 8) * 0x0101010101010101ull),
+                                          static_cast<long long>((b & 0xFFu) * 0x0101010101010101ull));
+    const __m128i set = _mm_cmpeq_epi8(_mm_and_si128(spread, sel), sel);
+    __m128i* p = reinterpret_cast<__m128i*>(st + x);
+    _mm_storeu_si128(p, _mm_or_si128(_mm_and_si128(set, unknown), _mm_andnot_si128(set, _mm_loadu_si128(p))));
+  }
+#endif
+  for (; x < nx; ++x)
+    if ((w[x / 64] >> (x % 64)) & 1u) st[x] = kUnknown;
+}
+
+// Scan x+ of one row: each run of candidates that starts right after an unknown voxel becomes
+// unknown. A seed (the run's first voxel) added to the run carries through it: (C + S) ^ C holds
+// the run and the bit past it. The seeds come from W as it was (a voxel made unknown here ends
+// up inside a run that is filled anyway; as a seed it would be added twice). Returns whether
+// anything grew.
+bool grow_up(word_t* w, word_t* c, std::size_t words) {
+  std::uint64_t before_top = 0, carry = 0, grown = 0;  // W's bit 63 of the word before, as it was
+  for (std::size_t i = 0; i < words; ++i) {
+    const std::uint64_t cw = c[i], ww = w[i];
+    const std::uint64_t seed = cw & ((ww << 1) | before_top);
+    before_top = ww >> 63;
+    const std::uint64_t a = cw + seed, sum = a + carry;
+    carry = static_cast<std::uint64_t>(a < cw) | static_cast<std::uint64_t>(sum < a);
+    const std::uint64_t fill = (sum ^ cw) & cw;
+    w[i] = ww | fill;
+    c[i] = cw & ~fill;
+    grown |= fill;
+  }
+  return grown != 0;
+}
+
+// Scan x- of one row: each run of candidates that ends right before an unknown voxel becomes
+// unknown, from the run's last voxel (a seed) down to its first (the highest non-candidate
+// below it, plus one). A run that reaches bit 0 goes on in the word below: its bit 63 is then a
+// seed, next to the bit 0 just made unknown.
+bool grow_down(word_t* w, word_t* c, std::size_t words) {
+  bool grown = false;
+  for (std::size_t i = words; i-- > 0;) {
+    std::uint64_t seed = c[i] & ((w[i] >> 1) | (i + 1 < words ? w[i + 1] << 63 : 0));
+    while (seed) {
+      const int k = 63 - __builtin_clzll(seed);
+      const std::uint64_t below = k == 63 ? ~std::uint64_t(0) : (std::uint64_t(2) << k) - 1;  // bits 0..k
+      const std::uint64_t gaps = ~c[i] & below;
+      const int j = gaps ? 64 - __builtin_clzll(gaps) : 0;  // the run's lowest bit in this word
+      const std::uint64_t fill = below & (~std::uint64_t(0) << j);
+      w[i] |= fill;
+      c[i] &= ~fill;
+      seed &= ~fill;
+      grown = true;
+    }
+  }
+  return grown;
+}
+
+// One step of a scan along y or z: row `cur` takes the unknown voxels of the row before it in
+// scan order, 64 lanes at once.
+bool grow_from(const word_t* prev_w, word_t* w, word_t* c, std::size_t words) {
+  std::uint64_t grown = 0;
+  for (std::size_t i = 0; i < words; ++i) {
+    const std::uint64_t g = prev_w[i] & c[i];
+    w[i] |= g;
+    c[i] &= ~g;
+    grown |= g;
+  }
+  return grown != 0;
+}
+
+}  // namespace
+
+std::size_t grow_unknown_scratch_bytes(const Dims& d) {
+  return 2 * d.ny * d.nz * ((d.nx + 63) / 64) * sizeof(std::uint64_t);
+}
+
+void grow_unknown(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& d, int threads,
+                  std::uint8_t* scratch, std::size_t scratch_bytes) {
+  const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, rows = ny * nz, words = (nx + 63) / 64;
+  std::vector<std::uint64_t> own_words;
+  word_t* masks;
+  if (scratch && scratch_bytes >= grow_unknown_scratch_bytes(d)) {
+    masks = reinterpret_cast<word_t*>(scratch);
+  } else {
+    own_words.resize(2 * rows * words);
+    masks = reinterpret_cast<word_t*>(own_words.data());
+  }
+  word_t* const W = masks;                  // row r at W + r * words
+  word_t* const C = masks + rows * words;
+  std::vector<std::uint8_t> grew(rows, 0);  // rows whose W changed: the only ones written back
+  std::uint8_t* const st = states.data();
+  auto row_w = [&](std::size_t r) { return W + r * words; };
+  auto row_c = [&](std::size_t r) { return C + r * words; };
+
+  // x and y, plane by plane (z fixed): the lines of both lie in the plane.
+  parallel_for_dynamic(nz, threads, [&](std::size_t z0, std::size_t z1) {
+    for (std::size_t z = z0; z < z1; ++z) {
+      const std::size_t r0 = ny * z;
+      for (std::size_t y = 0; y < ny; ++y) {
+        const std::size_t r = r0 + y;
+        pack_row(st + nx * r, own + nx * r, nx, row_w(r), row_c(r));
+        bool g = grow_up(row_w(r), row_c(r), words);
+        g = grow_down(row_w(r), row_c(r), words) || g;
+        grew[r] = g;
+      }
+      for (std::size_t y = 1; y < ny; ++y)
+        if (grow_from(row_w(r0 + y - 1), row_w(r0 + y), row_c(r0 + y), words)) grew[r0 + y] = 1;
+      for (std::size_t y = ny - 1; y-- > 0;)
+        if (grow_from(row_w(r0 + y + 1), row_w(r0 + y), row_c(r0 + y), words)) grew[r0 + y] = 1;
+    }
+  });
+  // z, slice by slice (y fixed).
+  parallel_for_dynamic(ny, threads, [&](std::size_t y0, std::size_t y1) {
+    for (std::size_t y = y0; y < y1; ++y) {
+      for (std::size_t z = 1; z < nz; ++z)
+        if (grow_from(row_w(y + ny * (z - 1)), row_w(y + ny * z), row_c(y + ny * z), words)) grew[y + ny * z] = 1;
+      for (std::size_t z = nz - 1; z-- > 0;)
+        if (grow_from(row_w(y + ny * (z + 1)), row_w(y + ny * z), row_c(y + ny * z), words)) grew[y + ny * z] = 1;
+    }
+  });
+  // Back into the states, rows that grew only.
+  parallel_for_dynamic(rows, threads, [&](std::size_t r0, std::size_t r1) {
+    for (std::size_t r = r0; r < r1; ++r)
+      if (grew[r]) unpack_row(row_w(r), nx, st + nx * r);
+  });
+}
+
+}  // namespace occseg::detail
