@@ -11,12 +11,20 @@
 namespace occseg {
 
 double mean_occupancy(const Grid& grid, const Block& b) {
+  // Cell by cell (kMeanCell^3 cells anchored at voxel 0), each cell's part in scan order.
+  constexpr std::uint32_t k = kMeanCell;
   double sum = 0;
-  for (std::uint32_t z = b.lo[2]; z < b.hi[2]; ++z)
-    for (std::uint32_t y = b.lo[1]; y < b.hi[1]; ++y) {
-      const float* row = grid.p.data() + grid.index(0, y, z);
-      for (std::uint32_t x = b.lo[0]; x < b.hi[0]; ++x) sum += row[x];
-    }
+  for (std::uint32_t cz = b.lo[2] / k * k; cz < b.hi[2]; cz += k)
+    for (std::uint32_t cy = b.lo[1] / k * k; cy < b.hi[1]; cy += k)
+      for (std::uint32_t cx = b.lo[0] / k * k; cx < b.hi[0]; cx += k) {
+        double part = 0;
+        for (std::uint32_t z = std::max(cz, b.lo[2]); z < std::min(cz + k, b.hi[2]); ++z)
+          for (std::uint32_t y = std::max(cy, b.lo[1]); y < std::min(cy + k, b.hi[1]); ++y) {
+            const float* row = grid.p.data() + grid.index(0, y, z);
+            for (std::uint32_t x = std::max(cx, b.lo[0]); x < std::min(cx + k, b.hi[0]); ++x) part += row[x];
+          }
+        sum += part;
+      }
   return sum / static_cast<double>(b.volume());
 }
 
@@ -47,28 +55,25 @@ void create_by_blocks(const Grid& grid, const std::vector<Block>& blocks, const 
   });
 }
 
-// Row by row, for blocks that tile the map on a lattice of cells (division's leaves: cubes of
-// Smin << k voxels aligned to their size, clipped by the map's far faces). Reading the map in
-// scan order streams it; block by block, 64 rows of 32 bytes per Smin block, the reading waited
-// on memory and each block's sum was one chain of dependent additions. A row adds its voxels to
-// the running sum of the block each stretch belongs to, in the row's order: a block's voxels
-// arrive in the same order as in mean_occupancy() (z, then y, then x), so every sum, and every
-// state, is the same bit for bit. Returns false (nothing written) for other blocks.
+// Row by row, for blocks that tile the map on the lattice of kMeanCell^3 cells (division's leaves
+// for Smin >= 8: cubes aligned to their size, clipped by the map's far faces). Each row adds
+// its voxels to the running sums of the cells it crosses, in the row's order, so each cell's
+// voxels arrive in scan order; the block sums add their cells' sums in scan order of the cells:
+// mean_occupancy(), bit for bit. The map is read once, as a stream, and every row adds into
+// nx / 8 independent sums (one chain of additions through a whole block, as a block-by-block
+// sum in scan order needs, ran at the latency of an addition). Returns false (nothing written)
+// for other blocks.
 bool create_by_rows(const Grid& grid, const std::vector<Block>& blocks, const Params& params, std::uint8_t* own,
                     float lo, float hi, std::uint8_t* states) {
   const Dims& d = grid.dims;
   const std::size_t dim[3] = {d.nx, d.ny, d.nz};
-  // The cell: the largest power of two (up to 64) that every block's corners sit on, the far
-  // faces of the map excepted. Cells below 4 voxels would cost too much memory: not this path.
-  std::uint32_t bits = 64, extent = 1;
+  constexpr std::size_t c = kMeanCell;
+  static_assert(kMeanCell == 8, "the row loop below adds eight voxels per cell");
   for (const Block& b : blocks)
     for (int a = 0; a < 3; ++a) {
       if (b.hi[a] <= b.lo[a] || b.hi[a] > dim[a]) return false;
-      bits |= b.lo[a] | (b.hi[a] == dim[a] ? 0u : b.hi[a]);
-      if (a > 0) extent = std::max(extent, b.hi[a] - b.lo[a]);
+      if (b.lo[a] % c || (b.hi[a] != dim[a] && b.hi[a] % c)) return false;  // off the lattice
     }
-  const std::size_t c = bits & (~bits + 1);  // lowest set bit
-  if (c < 4) return false;
   const std::size_t ncx = (d.nx + c - 1) / c, ncy = (d.ny + c - 1) / c, ncz = (d.nz + c - 1) / c;
   // Which block each cell belongs to; every cell exactly once, or this is no tiling.
   std::vector<std::uint32_t> cell(ncx * ncy * ncz, ~0u);
@@ -84,56 +89,59 @@ bool create_by_rows(const Grid& grid, const std::vector<Block>& blocks, const Pa
   }
   for (std::uint32_t id : cell)
     if (id == ~0u) return false;
-  // Bands of `band` rows in y and planes in z that no block crosses (division's blocks stay in
-  // their Smax tree) are independent: one task each; else the whole map is one task.
-  std::size_t band = 1;
-  while (band < extent) band *= 2;
-  for (const Block& b : blocks)
-    for (int a = 1; a < 3; ++a)
-      if (b.lo[a] / band != (b.hi[a] - 1) / band) band = std::max(d.ny, d.nz);
-  const std::size_t nby = (d.ny + band - 1) / band, nbz = (d.nz + band - 1) / band;
 
-  std::vector<double> sum(blocks.size(), 0.0);
+  // The cells' sums, a row of cells (c planes of c rows) per task.
+  std::vector<double> cell_sum(cell.size(), 0.0);
   const float* p = grid.p.data();
-  parallel_for_dynamic(nby * nbz, params.threads, [&](std::size_t t0, std::size_t t1) {
+  parallel_for_dynamic(ncy * ncz, params.threads, [&](std::size_t t0, std::size_t t1) {
     for (std::size_t t = t0; t < t1; ++t) {
-      const std::size_t y0 = (t % nby) * band, z0 = (t / nby) * band;
-      for (std::size_t z = z0; z < std::min(d.nz, z0 + band); ++z)
-        for (std::size_t y = y0; y < std::min(d.ny, y0 + band); ++y) {
+      const std::size_t cy = t % ncy, cz = t / ncy;
+      double* sums = cell_sum.data() + ncx * t;
+      for (std::size_t z = cz * c; z < std::min(d.nz, cz * c + c); ++z)
+        for (std::size_t y = cy * c; y < std::min(d.ny, cy * c + c); ++y) {
           const std::size_t i0 = d.nx * (y + d.ny * z);
           if (own) detail::own_states_of(p + i0, d.nx, lo, hi, own + i0);
-          const std::uint32_t* row_cells = cell.data() + ncx * (y / c + ncy * (z / c));
-          for (std::size_t cx = 0; cx < ncx;) {
-            // the block's stretch of this row: its consecutive cells
-            const std::uint32_t id = row_cells[cx];
-            std::size_t ce = cx + 1;
-            while (ce < ncx && row_cells[ce] == id) ++ce;
-            const std::size_t xe = std::min(d.nx, ce * c);
-            double acc = sum[id];
-            for (std::size_t x = cx * c; x < xe; ++x) acc += p[i0 + x];
-            sum[id] = acc;
-            cx = ce;
+          const float* row = p + i0;
+          std::size_t cx = 0;
+          for (; (cx + 1) * c <= d.nx; ++cx) {  // whole cells: eight additions each
+            const float* v = row + cx * c;
+            double acc = sums[cx];
+            acc += v[0], acc += v[1], acc += v[2], acc += v[3], acc += v[4], acc += v[5], acc += v[6], acc += v[7];
+            sums[cx] = acc;
+          }
+          if (cx < ncx) {  // the cell cut by the far face
+            double acc = sums[cx];
+            for (std::size_t x = cx * c; x < d.nx; ++x) acc += row[x];
+            sums[cx] = acc;
           }
         }
     }
   });
-  // Each cell's state, then the states row by row.
+  // Each block's sum over its cells in scan order, each cell's state, then the states row by row.
   std::vector<std::uint8_t> cell_state(cell.size());
-  for (std::size_t k = 0; k < cell.size(); ++k) {
-    const std::uint32_t id = cell[k];
-    cell_state[k] = static_cast<std::uint8_t>(params.state_of(sum[id] / static_cast<double>(blocks[id].volume())));
-  }
+  parallel_for(blocks.size(), params.threads, [&](std::size_t k0, std::size_t k1) {
+    for (std::size_t k = k0; k < k1; ++k) {
+      const Block& b = blocks[k];
+      double sum = 0;
+      for (std::size_t z = b.lo[2] / c; z < (b.hi[2] + c - 1) / c; ++z)
+        for (std::size_t y = b.lo[1] / c; y < (b.hi[1] + c - 1) / c; ++y)
+          for (std::size_t x = b.lo[0] / c; x < (b.hi[0] + c - 1) / c; ++x) sum += cell_sum[x + ncx * (y + ncy * z)];
+      const auto st = static_cast<std::uint8_t>(params.state_of(sum / static_cast<double>(b.volume())));
+      for (std::size_t z = b.lo[2] / c; z < (b.hi[2] + c - 1) / c; ++z)
+        for (std::size_t y = b.lo[1] / c; y < (b.hi[1] + c - 1) / c; ++y)
+          for (std::size_t x = b.lo[0] / c; x < (b.hi[0] + c - 1) / c; ++x) cell_state[x + ncx * (y + ncy * z)] = st;
+    }
+  });
   parallel_for(d.ny * d.nz, params.threads, [&](std::size_t r0, std::size_t r1) {
     for (std::size_t r = r0; r < r1; ++r) {
       const std::uint8_t* cs = cell_state.data() + ncx * (r % d.ny / c + ncy * (r / d.ny / c));
       std::uint8_t* row = states + d.nx * r;
       std::size_t cx = 0;
-      if (c == 8)  // Smin = 8, the default: one 8-byte store per cell
-        for (; (cx + 1) * 8 <= d.nx; ++cx) {
-          const std::uint64_t eight = 0x0101010101010101ull * cs[cx];
-          std::memcpy(row + cx * 8, &eight, 8);
-        }
-      for (; cx < ncx; ++cx) std::memset(row + cx * c, cs[cx], std::min(c, d.nx - cx * c));
+      for (; (cx + 1) * c <= d.nx; ++cx) {  // one 8-byte store per cell
+        const std::uint64_t eight = 0x0101010101010101ull * cs[cx];
+        std::memcpy(row + cx * c, &eight, c);
+      }
+      if (cx < ncx) std::memset(row + cx * c, cs[cx], d.nx - cx * c);
     }
   });
   return true;

@@ -54,38 +54,51 @@ TEST(Create, OwnStatesFoundDuringCreationMatchTheirDefinition) {
   }
 }
 
-// The block means are the sums of mean_occupancy(): its additions in its order (z, then y, then x
-// inside the block), whether creation reads the map row by row (blocks that tile it on a lattice
-// of cells, as division's leaves do) or block by block (any other disjoint blocks). With t =
-// 2^-54 (a quarter of 1.0's ulp), 1.0 + t rounds back to 1.0, while k t added before the 1.0
-// give 1 + k t rounded to a multiple of 2^-52: 1.0 exactly for k <= 1 only. A 1.0 placed as a
-// block's first or second voxel in that order makes its sum exactly 1.0, and thresholds on
-// exactly those means tell that order from any other (a row read backwards puts 6 t first).
-TEST(Create, BlockMeansAddInScanOrderOnBothPaths) {
+// The block means are summed in mean_occupancy()'s order (cell by cell over 8^3 cells, each
+// cell's voxels in scan order, the cells in scan order), whether creation reads the map row by
+// row (blocks that tile it on the cell lattice, as division's leaves do) or block by block (any
+// other disjoint blocks). With t = 2^-54 (a quarter of 1.0's ulp u = 2^-52), 1.0 + t rounds back
+// to 1.0 while k t added before the 1.0 round to a multiple of u, so the sums below differ with
+// the order, and thresholds on exactly the documented sums tell it from the others.
+TEST(Create, BlockMeansAddCellByCellOnBothPaths) {
   const float t = std::ldexp(1.0f, -54);
-  Grid g(Dims{24, 16, 16}, t);
-  g.at(0, 0, 0) = 1.0f;   // first voxel of the 16^3 block A
-  g.at(17, 0, 0) = 1.0f;  // second voxel of the 8^3 block B
+  const double u = std::ldexp(1.0, -52);
+  Grid g(Dims{24, 16, 16}, 0.0f);
+  // Block A (16^3, eight cells): 1.0 first in its first cell, 2t in the cell at (0, 8, 0) and
+  // 4t = u in the one at (8, 8, 0). In order: 1 + 0.5u ties back to 1.0, then 1 + u. The whole
+  // block in scan order instead: 1.0 (each t after the 1.0 rounds away); the cells of a row in
+  // the other order: 1 + u, then 1 + 1.5u ties to 1 + 2u.
+  g.at(0, 0, 0) = 1.0f;
+  g.at(1, 10, 3) = g.at(2, 10, 3) = t;
+  for (std::uint32_t x = 9; x < 13; ++x) g.at(x, 10, 3) = t;
+  // Block B (8^3, one cell): 1.0 as its second voxel, t everywhere else. In scan order the first
+  // t and the 1.0 make 1.0, and every t after rounds away: exactly 1.0. A row read backwards puts
+  // 6 t first: 1 + 2u.
+  for (std::uint32_t z = 0; z < 8; ++z)
+    for (std::uint32_t y = 0; y < 8; ++y)
+      for (std::uint32_t x = 16; x < 24; ++x) g.at(x, y, z) = t;
+  g.at(17, 0, 0) = 1.0f;
   const Block a{{0, 0, 0}, {16, 16, 16}}, b{{16, 0, 0}, {24, 8, 8}};
   std::vector<Block> tiling = {a, b, {{16, 8, 0}, {24, 16, 8}}, {{16, 0, 8}, {24, 8, 16}}, {{16, 8, 8}, {24, 16, 16}}};
-  // The same blocks with the last one cut at x = 18: off the 4-voxel lattice, read block by block.
+  // The same blocks with the last one cut at x = 18: off the cell lattice, read block by block.
   std::vector<Block> cut = tiling;
   cut.back().hi[0] = 18;
   cut.push_back({{18, 8, 8}, {24, 16, 16}});
-  EXPECT_EQ(mean_occupancy(g, a), 1.0 / 4096);
+  EXPECT_EQ(mean_occupancy(g, a), (1 + u) / 4096);
   EXPECT_EQ(mean_occupancy(g, b), 1.0 / 512);
   for (const auto& blocks : {tiling, cut}) {
     Params p;
-    p.free_below = 1e-9;            // blocks of t only: free
-    p.occupied_above = 1.0 / 4096;  // A exactly at the bound: unknown; any other order: occupied
+    p.free_below = 1e-30;        // blocks of zeros: free
+    p.occupied_above = 1.0 / 4096;  // A just above the bound: occupied; the whole block in scan order: not
     std::vector<std::uint8_t> st = create_segments(g, blocks, p);
-    EXPECT_EQ(st[g.index(5, 9, 3)], 1) << blocks.size() << " blocks";
-    EXPECT_EQ(st[g.index(20, 2, 2)], 2);
+    EXPECT_EQ(st[g.index(5, 9, 3)], 2) << blocks.size() << " blocks";
     EXPECT_EQ(st[g.index(20, 12, 12)], 0);
-    p.occupied_above = 1.0 / 512;  // the same for B
+    p.occupied_above = (1 + u) / 4096;  // A exactly at the bound: unknown; the cells in another order: not
+    st = create_segments(g, blocks, p);
+    EXPECT_EQ(st[g.index(5, 9, 3)], 1) << blocks.size() << " blocks";
+    p.occupied_above = 1.0 / 512;  // B exactly at the bound: unknown; any other order: occupied
     st = create_segments(g, blocks, p);
     EXPECT_EQ(st[g.index(20, 2, 2)], 1) << blocks.size() << " blocks";
-    EXPECT_EQ(st[g.index(0, 0, 0)], 1);
     for (int threads : {1, 2, 3}) {
       p.threads = threads;
       EXPECT_EQ(create_segments(g, blocks, p), st) << threads << " threads";

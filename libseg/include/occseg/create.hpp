@@ -10,6 +10,14 @@
 
 namespace occseg {
 
+// Edge of the cells a block mean is summed by: the block's voxels are added cell by cell over the
+// lattice of kMeanCell^3 cells anchored at voxel (0, 0, 0), each cell's part in scan order (x
+// fastest), the parts in scan order of the cells. A fixed order, so a mean never depends on the
+// thread count; by cells, so that creation reads the map once, row by row, into many
+// independent sums (docs/algorithm.md).
+constexpr std::uint32_t kMeanCell = 8;
+
+// The mean occupancy probability of `block` (eq. 3), summed in the order above.
 double mean_occupancy(const Grid& grid, const Block& block);
 
 // Paints each block's MOP state into a per-voxel state array (values of occseg::State). The

@@ -257,10 +257,20 @@ std::vector<Block> divide(const Grid& grid, const TextureMap& tex, const Params&
 std::vector<std::uint8_t> create(const Grid& grid, const std::vector<Block>& blocks, const Params& params) {
   std::vector<std::uint8_t> st(grid.dims.count());
   for (const Block& b : blocks) {
+    // The documented order: by cells of 8^3 voxels (anchored at voxel 0), each cell's voxels of
+    // the block in scan order, the cells in scan order.
     double sum = 0;
-    for (std::uint32_t z = b.lo[2]; z < b.hi[2]; ++z)
-      for (std::uint32_t y = b.lo[1]; y < b.hi[1]; ++y)
-        for (std::uint32_t x = b.lo[0]; x < b.hi[0]; ++x) sum += grid.at(x, y, z);
+    for (std::uint32_t cz = b.lo[2] / 8 * 8; cz < b.hi[2]; cz += 8)  // the cells it meets
+      for (std::uint32_t cy = b.lo[1] / 8 * 8; cy < b.hi[1]; cy += 8)
+        for (std::uint32_t cx = b.lo[0] / 8 * 8; cx < b.hi[0]; cx += 8) {
+          double part = 0;
+          for (std::uint32_t z = cz; z < cz + 8; ++z)
+            for (std::uint32_t y = cy; y < cy + 8; ++y)
+              for (std::uint32_t x = cx; x < cx + 8; ++x)
+                if (x >= b.lo[0] && x < b.hi[0] && y >= b.lo[1] && y < b.hi[1] && z >= b.lo[2] && z < b.hi[2])
+                  part += grid.at(x, y, z);
+          sum += part;
+        }
     const auto s = static_cast<std::uint8_t>(params.state_of(sum / static_cast<double>(b.volume())));
     for (std::uint32_t z = b.lo[2]; z < b.hi[2]; ++z)
       for (std::uint32_t y = b.lo[1]; y < b.hi[1]; ++y)
