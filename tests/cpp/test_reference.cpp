@@ -170,9 +170,10 @@ TEST(Reference, UnknownGrowthMatchesOnRandomStates) {
         std::vector<std::uint8_t> got = st;
         refine_unknown(got, g, p);
         EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " threads " << threads;
-        if (round == 3 && d.nx == 200)  // both rows wholly unknown
+        if (round == 3 && d.nx == 200) {  // both rows wholly unknown
           EXPECT_EQ(std::count(got.begin(), got.begin() + 200, 1) + std::count(got.begin() + 400, got.begin() + 600, 1),
                     400);
+        }
         std::vector<std::uint64_t> scratch(detail::grow_unknown_scratch_bytes(d) / 8 + 1, 0xA5A5A5A5A5A5A5A5ull);
         got = st;
         const std::vector<std::uint8_t> own = own_states(g, p);
