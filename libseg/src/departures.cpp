@@ -32,10 +32,11 @@ struct BitMask {
   std::size_t nx = 0, rows = 0, W = 0;
   std::vector<std::uint64_t> own_words;
   word_t* w = nullptr;
-  BitMask(std::size_t nx_, std::size_t rows_, void* storage = nullptr) : nx(nx_), rows(rows_), W((nx_ + 63) / 64) {
+  BitMask(std::size_t nx_, std::size_t rows_, void* storage = nullptr, bool clear = true)
+      : nx(nx_), rows(rows_), W((nx_ + 63) / 64) {
     if (storage) {
       w = static_cast<word_t*>(storage);
-      std::fill(w, w + rows * W, std::uint64_t(0));
+      if (clear) std::fill(w, w + rows * W, std::uint64_t(0));
     } else {
       own_words.assign(rows * W, 0);
       w = reinterpret_cast<word_t*>(own_words.data());
@@ -62,53 +63,44 @@ inline std::uint64_t from_left(const word_t* a, std::size_t i, unsigned k, std::
 
 // One axis of a box erosion (AND; the outside counts as 1) or dilation (OR; the outside counts as
 // 0) of radius r, from `in` to `out`: the same windows, clipped by the map, as the byte version it
-// replaced (docs/performance.md).
-void bit_box_pass(const BitMask& in, BitMask& out, const Dims& d, int axis, int r, bool erode, int threads) {
+// replaced (docs/performance.md). Along x, rows [r0, r1).
+void box_x(const BitMask& in, BitMask& out, std::size_t r0, std::size_t r1, int r, bool erode) {
   const std::size_t W = in.W;
   const std::uint64_t tail = in.tail();
-  if (axis == 0) {
-    // Erosion: the bits past nx count as 1 while shifting, then go back to 0.
-    const std::uint64_t pad = erode ? ~tail : 0, outside = erode ? ~std::uint64_t(0) : 0;
-    parallel_for_dynamic(in.rows, threads, [&](std::size_t r0, std::size_t r1) {
-      for (std::size_t rw = r0; rw < r1; ++rw) {
-        const word_t* a = in.row(rw);
-        word_t* o = out.row(rw);
-        for (std::size_t i = 0; i < W; ++i) {
-          std::uint64_t v = a[i];
-          for (int k = 1; k <= r && std::size_t(k) < d.nx; ++k) {
-            // Radii of 64 or more never occur (gap_radius <= 16), so k < 64 here.
-            const std::uint64_t rt = from_right(a, W, i, static_cast<unsigned>(k), pad, outside);
-            const std::uint64_t lt = from_left(a, i, static_cast<unsigned>(k), outside);
-            v = erode ? (v & rt & lt) : (v | rt | lt);
-          }
-          o[i] = i + 1 == W ? v & tail : v;
-        }
+  // Erosion: the bits past nx count as 1 while shifting, then go back to 0.
+  const std::uint64_t pad = erode ? ~tail : 0, outside = erode ? ~std::uint64_t(0) : 0;
+  for (std::size_t rw = r0; rw < r1; ++rw) {
+    const word_t* a = in.row(rw);
+    word_t* o = out.row(rw);
+    for (std::size_t i = 0; i < W; ++i) {
+      std::uint64_t v = a[i];
+      for (int k = 1; k <= r && std::size_t(k) < in.nx; ++k) {
+        // Radii of 64 or more never occur (gap_radius <= 16), so k < 64 here.
+        const std::uint64_t rt = from_right(a, W, i, static_cast<unsigned>(k), pad, outside);
+        const std::uint64_t lt = from_left(a, i, static_cast<unsigned>(k), outside);
+        v = erode ? (v & rt & lt) : (v | rt | lt);
       }
-    });
-    return;
+      o[i] = i + 1 == W ? v & tail : v;
+    }
   }
-  // y or z: whole rows combine with rows up to r away along the axis.
-  const std::size_t len = axis == 1 ? d.ny : d.nz, planes = axis == 1 ? d.nz : d.ny;
-  const std::size_t step = axis == 1 ? 1 : d.ny;      // rows between neighbours along the axis
-  const std::size_t plane = axis == 1 ? d.ny : 1;     // rows between planes
-  const std::size_t R = static_cast<std::size_t>(r);
-  parallel_for_dynamic(planes, threads, [&](std::size_t p0, std::size_t p1) {
-    for (std::size_t pl = p0; pl < p1; ++pl)
-      for (std::size_t k = 0; k < len; ++k) {
-        const std::size_t base = pl * plane;
-        word_t* o = out.row(base + k * step);
-        const std::size_t lo = k >= R ? k - R : 0, hi = std::min(len - 1, k + R);
-        const word_t* first = in.row(base + lo * step);
-        std::copy(first, first + W, o);
-        for (std::size_t j = lo + 1; j <= hi; ++j) {
-          const word_t* a = in.row(base + j * step);
-          if (erode)
-            for (std::size_t i = 0; i < W; ++i) o[i] &= a[i];
-          else
-            for (std::size_t i = 0; i < W; ++i) o[i] |= a[i];
-        }
-      }
-  });
+}
+
+// Along y (the rows of plane z: step 1, len ny, first row z * ny) or z (the rows of slice y:
+// step ny, len nz, first row y): row k of the line takes the rows up to r away along it.
+void box_line(const BitMask& in, BitMask& out, std::size_t first, std::size_t step, std::size_t len, std::size_t k,
+              int r, bool erode) {
+  const std::size_t W = in.W, R = static_cast<std::size_t>(r);
+  word_t* o = out.row(first + k * step);
+  const std::size_t lo = k >= R ? k - R : 0, hi = std::min(len - 1, k + R);
+  const word_t* a0 = in.row(first + lo * step);
+  std::copy(a0, a0 + W, o);
+  for (std::size_t j = lo + 1; j <= hi; ++j) {
+    const word_t* a = in.row(first + j * step);
+    if (erode)
+      for (std::size_t i = 0; i < W; ++i) o[i] &= a[i];
+    else
+      for (std::size_t i = 0; i < W; ++i) o[i] |= a[i];
+  }
 }
 
 // Bits of one row: own[x] at 0.5. SSE2 (every x86-64) 16 voxels at a time.
@@ -195,22 +187,44 @@ namespace {
 // reading them back, cost more than the opening itself.
 BitMask region_bits(const std::uint8_t* own, const Dims& d, const Params& params, std::uint8_t* scratch = nullptr,
                     std::size_t scratch_bytes = 0) {
-  const std::size_t nx = d.nx, rows = d.ny * d.nz, bytes = BitMask::bytes(nx, rows);
-  // Two masks in the scratch when it holds them (not for very narrow maps: a word per row).
-  const bool fits = scratch && 2 * bytes <= scratch_bytes;
-  BitMask a(nx, rows, fits ? scratch : nullptr);
-  parallel_for_dynamic(rows, params.threads, [&](std::size_t r0, std::size_t r1) {
-    for (std::size_t rw = r0; rw < r1; ++rw) pack_half(own + rw * nx, nx, a.row(rw));
-  });
+  const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, rows = ny * nz, bytes = BitMask::bytes(nx, rows);
   const int r = params.gap_radius;
-  if (r <= 0) return a;  // no opening: every 0.5 voxel is in a region
-  // Opening = erosion then dilation, each separable into three axis passes (ping-pong bit masks).
-  BitMask b(nx, rows, fits ? scratch + bytes : nullptr);
-  for (int pass = 0; pass < 6; ++pass) {
-    bit_box_pass(a, b, d, pass % 3, r, pass < 3, params.threads);
-    std::swap(a, b);
+  // Three masks in the scratch when it holds them (not for very narrow maps: a word per row).
+  // Every row of a mask is written before it is read (bits past nx are 0): no clearing.
+  const bool fits = scratch && 3 * bytes <= scratch_bytes;
+  BitMask a(nx, rows, fits ? scratch : nullptr, false), b(nx, r > 0 ? rows : 0, fits ? scratch + bytes : nullptr, false),
+      c(nx, r > 0 ? rows : 0, fits ? scratch + 2 * bytes : nullptr, false);
+  if (r <= 0) {  // no opening: every 0.5 voxel is in a region
+    parallel_for_dynamic(rows, params.threads, [&](std::size_t r0, std::size_t r1) {
+      for (std::size_t rw = r0; rw < r1; ++rw) pack_half(own + rw * nx, nx, a.row(rw));
+    });
+    return a;
   }
-  return a;
+  // Opening = erosion then dilation, each three axis passes in the order x, y, z. The x and y
+  // passes stay inside a plane of fixed z, so they run plane by plane right after what they read
+  // (three parallel loops and in-cache planes instead of six loops over the whole mask):
+  //   per plane: 0.5 bits -> a, erode x a -> b, erode y b -> a;
+  //   per plane: erode z a -> b, dilate x b -> c, dilate y c -> b;
+  //   per plane: dilate z b -> c.
+  parallel_for_dynamic(nz, params.threads, [&](std::size_t z0, std::size_t z1) {
+    for (std::size_t z = z0; z < z1; ++z) {
+      for (std::size_t y = 0; y < ny; ++y) pack_half(own + (y + ny * z) * nx, nx, a.row(y + ny * z));
+      box_x(a, b, ny * z, ny * (z + 1), r, true);
+      for (std::size_t y = 0; y < ny; ++y) box_line(b, a, ny * z, 1, ny, y, r, true);
+    }
+  });
+  parallel_for_dynamic(nz, params.threads, [&](std::size_t z0, std::size_t z1) {
+    for (std::size_t z = z0; z < z1; ++z) {
+      for (std::size_t y = 0; y < ny; ++y) box_line(a, b, y, ny, nz, z, r, true);
+      box_x(b, c, ny * z, ny * (z + 1), r, false);
+      for (std::size_t y = 0; y < ny; ++y) box_line(c, b, ny * z, 1, ny, y, r, false);
+    }
+  });
+  parallel_for_dynamic(nz, params.threads, [&](std::size_t z0, std::size_t z1) {
+    for (std::size_t z = z0; z < z1; ++z)
+      for (std::size_t y = 0; y < ny; ++y) box_line(b, c, y, ny, nz, z, r, false);
+  });
+  return c;
 }
 
 inline bool bit(const BitMask& m, std::size_t row, std::size_t x) { return (m.row(row)[x / 64] >> (x % 64)) & 1u; }
