@@ -248,6 +248,26 @@ __attribute__((target("avx2"))) std::size_t codes_row_avx2(const float* p, const
   return x;
 }
 
+// Pass 2 from parked LBP codes, 16 voxels per step, in place: row[x] = lbp[x] * bins + level,
+// the level from the parked step v = row[x] as in codes_row_avx2 (steps <= 4096 compare as
+// signed 16-bit values). Returns the voxels done (a multiple of 16); the caller finishes the row.
+__attribute__((target("avx2"))) std::size_t codes_from_lbp_avx2(detail::code_t* row, const std::uint8_t* lbp,
+                                                                std::size_t n, const std::uint16_t* rises,
+                                                                std::size_t nr, std::uint16_t bins) {
+  __m256i rise[16];
+  for (std::size_t k = 0; k < nr; ++k) rise[k] = _mm256_set1_epi16(static_cast<short>(rises[k]));
+  const __m256i zero = _mm256_setzero_si256(), one = _mm256_set1_epi16(1), b = _mm256_set1_epi16(static_cast<short>(bins));
+  std::size_t x = 0;
+  for (; x + 16 <= n; x += 16) {
+    const __m256i v = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(row + x));
+    __m256i lvl = _mm256_andnot_si256(_mm256_cmpeq_epi16(v, zero), one);
+    for (std::size_t k = 0; k < nr; ++k) lvl = _mm256_sub_epi16(lvl, _mm256_cmpgt_epi16(v, rise[k]));  // -(-1)
+    const __m256i l = _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(lbp + x)));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(row + x), _mm256_add_epi16(_mm256_mullo_epi16(l, b), lvl));
+  }
+  return x;
+}
+
 #endif
 
 std::atomic<bool> g_vector_texture{true};
@@ -515,14 +535,23 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
         if (lbp_scratch) {  // the LBP codes are there: no map reads
           std::size_t x0 = 0, x1 = 0;
           if (!interior_row(d, y, z, x0, x1)) continue;
-          const std::size_t at = nx * (y + ny * z) + x0, n = x1 - x0;
+          const std::size_t at = nx * (y + ny * z) + x0;
+          std::size_t n = x1 - x0;
           detail::code_t* row = codes + at;
+          std::size_t done = 0;
+#ifdef OCCSEG_TEXTURE_AVX2
+          if (by_compares && use_avx2_kernel())
+            done = codes_from_lbp_avx2(row, lbp_scratch + at, n, rises.data(), rises.size(),
+                                       static_cast<std::uint16_t>(contrast_bins));
+#endif
+          row += done;
+          n -= done;
           if (by_compares) {
             levels_row(row, n, rises.data(), rises.size(), lvl.data());
           } else {
             for (std::size_t x = 0; x < n; ++x) lvl[x] = level[row[x]];
           }
-          combine_row(lbp_scratch + at, lvl.data(), n, static_cast<std::uint16_t>(contrast_bins), row);
+          combine_row(lbp_scratch + at + done, lvl.data(), n, static_cast<std::uint16_t>(contrast_bins), row);
           continue;
         }
         if (z + 2 < nz) prefetch_row(p + nx * (y + ny * (z + 2)), nx * sizeof(float));
