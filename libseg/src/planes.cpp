@@ -1,10 +1,16 @@
 #include "occseg/planes.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
 #include "occseg/parallel.hpp"
+#include "cpu_features.hpp"
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#endif
 
 namespace occseg {
 
@@ -73,22 +79,76 @@ std::size_t count_inliers(const std::vector<Vec>& pts, const Plane& pl) {
 }
 
 // MSAC cost: squared distances, capped at the inlier distance. Counting inliers alone would
-// prefer a slightly tilted plane that also grazes a few voxels of the layer above it. The terms
-// are added in point order; the sum stops growing exactly once it reaches `stop` (the terms are
-// not negative, so it could only grow further): such a plane loses to one that costs `stop`.
+// prefer a slightly tilted plane that also grazes a few voxels of the layer above it.
+//
+// The terms are summed in four lanes (point i into lane i % 4, each lane in point order) and
+// the cost is (l0 + l1) + (l2 + l3): the same sum whether four points at a time are computed in
+// AVX2 or one at a time. The lanes stop growing once their sum reaches `stop` (terms are not
+// negative, so the cost could only grow further): such a plane loses to one that costs `stop`.
+constexpr double kCap = kPlaneInlierDistance * kPlaneInlierDistance;
+constexpr std::size_t kCostChunk = 256;  // points between two looks at `stop` (a multiple of 4)
+
+inline double cost_term(const Plane& pl, double x, double y, double z) {
+  const double e = pl.distance(x, y, z);
+  return std::min(e * e, kCap);
+}
+
 double cost(const std::vector<Vec>& pts, const Plane& pl,
             double stop = std::numeric_limits<double>::infinity()) {
-  constexpr double cap = kPlaneInlierDistance * kPlaneInlierDistance;
-  double c = 0;
-  for (std::size_t b = 0; b < pts.size(); b += 256) {
-    for (std::size_t i = b; i < std::min(pts.size(), b + 256); ++i) {
-      const Vec& p = pts[i];
-      const double e = pl.distance(p[0], p[1], p[2]);
-      c += std::min(e * e, cap);
-    }
-    if (c >= stop) break;
+  double l[4] = {0, 0, 0, 0};
+  for (std::size_t b = 0; b < pts.size(); b += kCostChunk) {
+    for (std::size_t i = b; i < std::min(pts.size(), b + kCostChunk); ++i)
+      l[i % 4] += cost_term(pl, pts[i][0], pts[i][1], pts[i][2]);
+    if ((l[0] + l[1]) + (l[2] + l[3]) >= stop) break;
   }
-  return c;
+  return (l[0] + l[1]) + (l[2] + l[3]);
+}
+
+// The MSAC sample by coordinate, for cost_avx2().
+struct Coords {
+  std::vector<double> x, y, z;
+  explicit Coords(const std::vector<Vec>& pts) {
+    for (const Vec& p : pts) x.push_back(p[0]), y.push_back(p[1]), z.push_back(p[2]);
+  }
+};
+
+#if defined(__x86_64__) && defined(__GNUC__)
+// cost() four points at a time: the same operations in the same order per point (no FMA, which
+// would round differently), lane j of the vector is lane j of cost(). MSAC scores up to 256
+// planes on 4096 points: 1 ns per point in scalar code.
+__attribute__((target("avx2"))) double cost_avx2(const Coords& c, const Plane& pl, double stop) {
+  const __m256d n0 = _mm256_set1_pd(pl.n[0]), n1 = _mm256_set1_pd(pl.n[1]), n2 = _mm256_set1_pd(pl.n[2]);
+  const __m256d d = _mm256_set1_pd(pl.d), cap = _mm256_set1_pd(kCap);
+  __m256d acc = _mm256_setzero_pd();
+  const std::size_t n = c.x.size(), n4 = n & ~std::size_t(3);
+  double l[4];
+  std::size_t i = 0;
+  while (i < n4) {
+    for (const std::size_t e = std::min(n4, i + kCostChunk); i < e; i += 4) {
+      __m256d t = _mm256_add_pd(_mm256_mul_pd(n0, _mm256_loadu_pd(c.x.data() + i)),
+                                _mm256_mul_pd(n1, _mm256_loadu_pd(c.y.data() + i)));
+      t = _mm256_sub_pd(_mm256_add_pd(t, _mm256_mul_pd(n2, _mm256_loadu_pd(c.z.data() + i))), d);
+      // std::min(e * e, cap) is cap < e * e ? cap : e * e; minpd(a, b) is a < b ? a : b
+      acc = _mm256_add_pd(acc, _mm256_min_pd(_mm256_mul_pd(t, t), cap));
+    }
+    _mm256_storeu_pd(l, acc);
+    if ((l[0] + l[1]) + (l[2] + l[3]) >= stop) return (l[0] + l[1]) + (l[2] + l[3]);
+  }
+  _mm256_storeu_pd(l, acc);
+  for (; i < n; ++i) l[i % 4] += cost_term(pl, c.x[i], c.y[i], c.z[i]);
+  return (l[0] + l[1]) + (l[2] + l[3]);
+}
+#endif
+
+std::atomic<bool> g_vector_planes{true};
+
+// cost() of the sample in `c` (the same points as `pts`).
+double sample_cost(const std::vector<Vec>& pts, const Coords& c, const Plane& pl, double stop) {
+#if defined(__x86_64__) && defined(__GNUC__)
+  if (cpu_has_avx2() && g_vector_planes.load(std::memory_order_relaxed)) return cost_avx2(c, pl, stop);
+#endif
+  (void)c;
+  return cost(pts, pl, stop);
 }
 
 // Least-squares plane through the points within kPlaneInlierDistance of `pl`; false if degenerate.
@@ -163,6 +223,7 @@ bool sample_plane(const std::vector<Vec>& sample, std::uint64_t seed, Plane& bes
     dr.h.d = dot(dr.h.n, a);
   }
   const bool parallel = resolve_threads(threads) > 1;
+  const Coords coords(sample);
   double best_cost = std::numeric_limits<double>::infinity();
   // Adaptive stop: once the best plane holds a fraction w of the sample, a better one would have
   // been drawn with probability 1 - (1 - w^3)^k after k draws; stop when that exceeds 1 - 1e-9
@@ -175,7 +236,7 @@ bool sample_plane(const std::vector<Vec>& sample, std::uint64_t seed, Plane& bes
     const double stop = best_cost;  // scores from `stop` up cannot win: cut short
     const auto score = [&](std::size_t b, std::size_t e) {
       for (std::size_t k = b; k < e; ++k)
-        if (draws[k].valid) draws[k].score = cost(sample, draws[k].h, stop);
+        if (draws[k].valid) draws[k].score = sample_cost(sample, coords, draws[k].h, stop);
     };
     if (parallel)
       parallel_for(static_cast<std::size_t>(end - it), threads,
@@ -208,6 +269,12 @@ std::size_t refine_plane(const std::vector<Vec>& points, Plane& best) {
 }
 
 }  // namespace
+
+void detail::set_vector_planes(bool enabled) { g_vector_planes.store(enabled, std::memory_order_relaxed); }
+
+double detail::msac_cost(const std::vector<Vec>& points, const Plane& plane) {
+  return sample_cost(points, Coords(points), plane, std::numeric_limits<double>::infinity());
+}
 
 bool fit_dominant_plane(const std::vector<Vec>& points, std::uint64_t seed, Plane& plane, std::size_t& inliers,
                         int threads) {

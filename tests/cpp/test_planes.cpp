@@ -88,10 +88,49 @@ TEST(Planes, FitFindsTheDominantPlaneAndCountsItsInliers) {
   EXPECT_FALSE(fit_dominant_plane({{0, 0, 0}, {1, 1, 1}, {2, 2, 2}, {3, 3, 3}}, 1, pl, inliers));
 }
 
+// The cost of a candidate plane, bit for bit: the AVX2 code (four points at a time) and the
+// scalar code against the documented sum written out here, on points with non-integer
+// coordinates (other orders of the additions, or of the terms of a distance, round differently)
+// and 1 to 600 of them (the vector loop, its tail, the looks at the bound every 256 points).
+TEST(Planes, CostIsTheDocumentedSumOnBothKernels) {
+  std::uint64_t r = 9;
+  auto uniform = [&] {
+    r = r * 6364136223846793005ull + 1442695040888963407ull;
+    return double(r >> 11) * 0x1.0p-53;
+  };
+  int differs_from_serial = 0;
+  for (std::size_t n : {1, 3, 4, 7, 255, 256, 257, 600}) {
+    std::vector<std::array<double, 3>> pts(n);
+    for (auto& p : pts) p = {30 * uniform(), 30 * uniform(), 30 * uniform()};
+    for (int k = 0; k < 5; ++k) {
+      Plane pl;
+      const double a = 6.28 * uniform(), b = 3.14 * uniform();
+      pl.n = {std::cos(a) * std::sin(b), std::sin(a) * std::sin(b), std::cos(b)};
+      pl.d = 15 + 10 * uniform();
+      double lane[4] = {0, 0, 0, 0}, serial = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        const double e = pl.n[0] * pts[i][0] + pl.n[1] * pts[i][1] + pl.n[2] * pts[i][2] - pl.d;
+        const double t = std::min(e * e, kPlaneInlierDistance * kPlaneInlierDistance);
+        lane[i % 4] += t;
+        serial += t;
+      }
+      const double want = (lane[0] + lane[1]) + (lane[2] + lane[3]);
+      differs_from_serial += want != serial;
+      for (bool vector : {true, false}) {
+        detail::set_vector_planes(vector);
+        EXPECT_EQ(detail::msac_cost(pts, pl), want) << n << " points, plane " << k << ", vector " << vector;
+      }
+      detail::set_vector_planes(true);
+    }
+  }
+  EXPECT_GT(differs_from_serial, 5);  // the data tell the lanes from one serial sum
+}
+
 // The candidate planes are scored in batches over threads, then taken in draw order: the same
-// plane, bit for bit, for any thread count. Noisy planes holding 35 % to 95 % of the points (the
-// adaptive stop then ends anywhere from 13 to all 256 draws) among uniform outliers, below and
-// above the 4096-point sample.
+// plane, bit for bit, for any thread count, and with the AVX2 or the scalar cost. Noisy planes
+// holding 35 % to 95 % of the points (the adaptive stop then ends anywhere from 13 to all 256
+// draws) among uniform outliers, below and above the 4096-point sample, with non-integer
+// coordinates (their costs round differently in any other order of additions).
 TEST(Planes, FitIsTheSameForAnyThreadCount) {
   std::uint64_t r = 5;
   auto uniform = [&] {
@@ -111,10 +150,12 @@ TEST(Planes, FitIsTheSameForAnyThreadCount) {
       std::size_t in1 = 0;
       ASSERT_TRUE(fit_dominant_plane(pts, 99 + n, one, in1, 1));
       EXPECT_GT(in1, share * n * 0.8) << share << " " << n;  // it found the plane
-      for (int t : {2, 3, 0}) {
+      for (int t : {2, 3, 0, -1}) {  // -1: one thread, scalar cost
+        detail::set_vector_planes(t >= 0);
         Plane pl;
         std::size_t in = 0;
-        ASSERT_TRUE(fit_dominant_plane(pts, 99 + n, pl, in, t));
+        ASSERT_TRUE(fit_dominant_plane(pts, 99 + n, pl, in, std::max(t, 1)));
+        detail::set_vector_planes(true);
         EXPECT_EQ(pl.n, one.n) << share << " " << n << " threads " << t;
         EXPECT_EQ(pl.d, one.d) << share << " " << n << " threads " << t;
         EXPECT_EQ(in, in1);

@@ -56,4 +56,14 @@ bool fit_dominant_plane(const std::vector<std::array<double, 3>>& points, std::u
 void split_support_planes(const Grid& grid, std::vector<std::uint32_t>& labels, std::vector<Segment>& segments,
                           std::size_t min_plane, bool occupied26, int threads = 1);
 
+namespace detail {
+// For tests and benchmarks: false scores candidate planes with the scalar code even where the
+// processor has AVX2 (both give identical costs). Process-wide.
+void set_vector_planes(bool enabled);
+// The MSAC cost of `plane` on `points` as the plane search computes it: the squared distances,
+// capped at kPlaneInlierDistance^2, point i's added to lane i % 4 in point order, the cost
+// (l0 + l1) + (l2 + l3). For tests.
+double msac_cost(const std::vector<std::array<double, 3>>& points, const Plane& plane);
+}  // namespace detail
+
 }  // namespace occseg
