@@ -60,6 +60,19 @@ int floor_with_box(int x, int y, int z) {
   return in_box(x, y, z, 10, 12, 3, 13, 15, 7) ? 2 : 0;
 }
 
+// Uniform doubles in [0, 1) from a fixed sequence (a 64-bit LCG): the same points everywhere.
+class Uniform {
+ public:
+  explicit Uniform(std::uint64_t seed) : r_(seed) {}
+  double operator()() {
+    r_ = r_ * 6364136223846793005ull + 1442695040888963407ull;
+    return double(r_ >> 11) * 0x1.0p-53;
+  }
+
+ private:
+  std::uint64_t r_;
+};
+
 }  // namespace
 
 TEST(Planes, FitFindsTheDominantPlaneAndCountsItsInliers) {
@@ -93,11 +106,7 @@ TEST(Planes, FitFindsTheDominantPlaneAndCountsItsInliers) {
 // coordinates (other orders of the additions, or of the terms of a distance, round differently)
 // and 1 to 600 of them (the vector loop, its tail, the looks at the bound every 256 points).
 TEST(Planes, CostIsTheDocumentedSumOnBothKernels) {
-  std::uint64_t r = 9;
-  auto uniform = [&] {
-    r = r * 6364136223846793005ull + 1442695040888963407ull;
-    return double(r >> 11) * 0x1.0p-53;
-  };
+  Uniform uniform(9);
   int differs_from_serial = 0;
   for (std::size_t n : {1, 3, 4, 7, 255, 256, 257, 600}) {
     std::vector<std::array<double, 3>> pts(n);
@@ -132,11 +141,7 @@ TEST(Planes, CostIsTheDocumentedSumOnBothKernels) {
 // draws) among uniform outliers, below and above the 4096-point sample, with non-integer
 // coordinates (their costs round differently in any other order of additions).
 TEST(Planes, FitIsTheSameForAnyThreadCount) {
-  std::uint64_t r = 5;
-  auto uniform = [&] {
-    r = r * 6364136223846793005ull + 1442695040888963407ull;
-    return double(r >> 11) * 0x1.0p-53;
-  };
+  Uniform uniform(5);
   int searched = 0;
   for (double share : {0.35, 0.5, 0.7, 0.95})
     for (std::size_t n : {900, 6000}) {
