@@ -111,12 +111,11 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, st
   Stages st(params, r);
 
   // The label array holds the stages' per-voxel scratch until the labelling writes the labels:
-  // the texture codes (2 bytes per voxel, with the texture's LBP codes in a third byte while it
-  // runs) through the division, then the own states (1 byte)
-  // through the refinement, beside the default rules' bit masks. It is allocated (or recycled)
-  // once and paged in once; separate arrays cost three more allocations, zero-fills and page-ins
-  // (docs/performance.md, "Fourth round"). Peak: the labels and the states (5 bytes per voxel),
-  // as before; a recycled array no longer adds to it.
+  // the texture codes (bytes [0, 2n)) through the division, with the texture's LBP codes in
+  // [2n, 3n) while it runs; then the own states ([0, n)) through the refinement, beside the
+  // refinement's bit masks. It is allocated (or recycled) once and paged in once; separate arrays
+  // cost more allocations, zero-fills and page-ins (docs/performance.md, "Fourth round"). Peak:
+  // the labels and the states (5 bytes per voxel); a recycled array does not add to it.
   const std::size_t n = grid.dims.count();
   detail::check_labels_fit(n);  // before any stage allocates: the labels could not hold the result
   std::vector<Block> blocks;
