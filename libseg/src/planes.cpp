@@ -291,25 +291,40 @@ namespace {
 // One pass of the split over segment `s`; state shared between its steps.
 class Splitter {
  public:
-  Splitter(const Grid& g, std::vector<std::uint32_t>& labels, std::vector<Segment>& segments, bool occupied26,
-           int threads)
-      : g_(g), d_(g.dims), labels_(labels), segs_(segments), conn26_(occupied26), threads_(threads) {}
+  Splitter(const Grid& g, std::vector<std::uint32_t>& labels, std::vector<Segment>& segments, bool occupied26)
+      : g_(g), d_(g.dims), labels_(labels), segs_(segments), conn26_(occupied26) {}
 
   // Examines segment `s`. Its voxels are [first, last) in scan order when the caller bucketed
   // them, else (first = nullptr) they are found by scanning its box.
-  void run(std::uint32_t s, std::size_t min_plane, const std::uint32_t* first, const std::uint32_t* last) {
-    // fit_dominant_plane() in two steps: a segment whose sample shows no plane near half of it
-    // (a sprawling noisy region) is rejected before its voxels are even listed.
+  // fit_dominant_plane() in two steps. The first, search(), finds the plane of s's sample and
+  // rejects a segment whose sample shows no plane near half of it (a sprawling noisy region)
+  // before its voxels are even listed. It reads the labels and the segment table only, into
+  // buffers of its own, so several segments may be searched at once while none is being split.
+  struct Found {
+    bool plane = false;
+    Plane pl;
+  };
+  Found search(std::uint32_t s, const std::uint32_t* first, const std::uint32_t* last, int threads) const {
     const std::size_t n = first ? static_cast<std::size_t>(last - first) : segs_[s].voxels;
     std::vector<std::size_t> ranks;
     for_sample(n, [&](std::size_t i) { ranks.push_back(i); });
-    pts_.clear();
+    std::vector<Vec> pts;
     std::uint32_t first_voxel = 0;
-    collect_sample(s, first, ranks, first_voxel);
-    Plane pl;
-    if (!sample_plane(pts_, 0x6F6363736567ull ^ (std::uint64_t(first_voxel) * 0x9E3779B97F4A7C15ull), pl, threads_) ||
-        10 * count_inliers(pts_, pl) < 4 * pts_.size())  // under 40 %: far from half
-      return;
+    collect_sample(s, first, ranks, first_voxel, pts);
+    Found f;
+    f.plane = sample_plane(pts, 0x6F6363736567ull ^ (std::uint64_t(first_voxel) * 0x9E3779B97F4A7C15ull), f.pl,
+                           threads) &&
+              10 * count_inliers(pts, f.pl) >= 4 * pts.size();  // under 40 %: far from half
+    return f;
+  }
+
+  // The second step with what search() found for s: the refits over all its voxels, then the
+  // split itself.
+  void split(std::uint32_t s, std::size_t min_plane, const std::uint32_t* first, const std::uint32_t* last,
+             const Found& found) {
+    if (!found.plane) return;
+    const std::size_t n = first ? static_cast<std::size_t>(last - first) : segs_[s].voxels;
+    Plane pl = found.pl;
     list_members(s, first, last);
     pts_.resize(n);
     for (std::size_t m = 0; m < n; ++m) pts_[m] = coords(members_[m]);
@@ -353,14 +368,14 @@ class Splitter {
     return std::fabs(plane_.distance(c[0], c[1], c[2])) <= kPlaneInlierDistance;
   }
 
-  // The coordinates of the voxels of s with the given ranks (ascending) in scan order, into pts_.
+  // The coordinates of the voxels of s with the given ranks (ascending) in scan order, into pts.
   // Without a bucket, rows are counted with a vectorised compare and only the few rows that hold
   // a sampled rank are walked voxel by voxel (a branch per voxel cost 40 ms on a noisy map).
   void collect_sample(std::uint32_t s, const std::uint32_t* first, const std::vector<std::size_t>& ranks,
-                      std::uint32_t& first_voxel) {
+                      std::uint32_t& first_voxel, std::vector<Vec>& pts) const {
     if (first) {
       first_voxel = first[0];
-      for (std::size_t r : ranks) pts_.push_back(coords(first[r]));
+      for (std::size_t r : ranks) pts.push_back(coords(first[r]));
       return;
     }
     const Segment& seg = segs_[s];
@@ -378,7 +393,7 @@ class Splitter {
         for (std::size_t x = x0; x < x1; ++x) {
           if (row[x] != s) continue;
           if (rank == 0) first_voxel = static_cast<std::uint32_t>(g_.index(x, y, z));
-          if (next < ranks.size() && ranks[next] == rank) pts_.push_back(coords(g_.index(x, y, z))), ++next;
+          if (next < ranks.size() && ranks[next] == rank) pts.push_back(coords(g_.index(x, y, z))), ++next;
           ++rank;
         }
       }
@@ -588,7 +603,6 @@ class Splitter {
   std::vector<std::uint32_t>& labels_;
   std::vector<Segment>& segs_;
   const bool conn26_;
-  const int threads_;  // for the plane search's scoring
   Plane plane_;
   std::vector<std::uint32_t> members_, stack_;
   std::vector<Vec> pts_;
@@ -618,25 +632,37 @@ void split_support_planes(const Grid& grid, std::vector<std::uint32_t>& labels, 
     boxes += box;
     voxels += seg.voxels;
   }
-  Splitter splitter(grid, labels, segments, occupied26, threads);
-  if (boxes <= labels.size()) {
-    for (std::uint32_t s : candidates) splitter.run(s, min_plane, nullptr, nullptr);
-    return;
-  }
-  std::vector<std::uint32_t> slot(original, ~0u);
+  Splitter splitter(grid, labels, segments, occupied26);
+  std::vector<std::uint32_t> members;  // bucketed voxels of the candidates, candidate by candidate
   std::vector<std::size_t> start{0};
-  for (std::uint32_t s : candidates) {
-    slot[s] = static_cast<std::uint32_t>(start.size() - 1);
-    start.push_back(start.back() + segments[s].voxels);
+  if (boxes > labels.size()) {
+    std::vector<std::uint32_t> slot(original, ~0u);
+    for (std::uint32_t s : candidates) {
+      slot[s] = static_cast<std::uint32_t>(start.size() - 1);
+      start.push_back(start.back() + segments[s].voxels);
+    }
+    members.resize(voxels);
+    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t i = 0; i < labels.size(); ++i) {
+      const std::uint32_t k = slot[labels[i]];
+      if (k != ~0u) members[fill[k]++] = static_cast<std::uint32_t>(i);
+    }
   }
-  std::vector<std::uint32_t> members(voxels);
-  std::vector<std::size_t> fill(start.begin(), start.end() - 1);
-  for (std::size_t i = 0; i < labels.size(); ++i) {
-    const std::uint32_t k = slot[labels[i]];
-    if (k != ~0u) members[fill[k]++] = static_cast<std::uint32_t>(i);
-  }
-  for (std::uint32_t s : candidates)
-    splitter.run(s, min_plane, members.data() + start[slot[s]], members.data() + start[slot[s] + 1]);
+  const auto first = [&](std::size_t k) { return members.empty() ? nullptr : members.data() + start[k]; };
+  const auto last = [&](std::size_t k) { return members.empty() ? nullptr : members.data() + start[k + 1]; };
+  // The searches first (they only read), several segments at once on more threads (each
+  // searching on one), or one segment's candidate planes over the threads; then the splits, one
+  // segment after the other in candidate order, as before.
+  std::vector<Splitter::Found> found(candidates.size());
+  if (resolve_threads(threads) > 1 && candidates.size() > 1)
+    parallel_for_dynamic(candidates.size(), threads, [&](std::size_t k0, std::size_t k1) {
+      for (std::size_t k = k0; k < k1; ++k) found[k] = splitter.search(candidates[k], first(k), last(k), 1);
+    });
+  else
+    for (std::size_t k = 0; k < candidates.size(); ++k)
+      found[k] = splitter.search(candidates[k], first(k), last(k), threads);
+  for (std::size_t k = 0; k < candidates.size(); ++k)
+    splitter.split(candidates[k], min_plane, first(k), last(k), found[k]);
 }
 
 }  // namespace occseg

@@ -170,6 +170,41 @@ TEST(Planes, FitIsTheSameForAnyThreadCount) {
   EXPECT_EQ(searched, 8);
 }
 
+// Several candidates: their planes are searched at once on more threads, then split one after
+// the other. Three shelves (floors at z = 2, 8, 14 over separate x ranges, unseen below) each
+// with a box on it, and a lone box: the same labels and segments for 1, 2 and 3 threads, and each
+// shelf's box split off.
+TEST(Planes, SeveralCandidatesSplitTheSameForAnyThreadCount) {
+  auto shelves = [](int x, int y, int z) {
+    for (int k = 0; k < 3; ++k) {
+      const int x0 = 20 * k, zf = 2 + 6 * k;
+      if (x < x0 || x >= x0 + 18) continue;
+      if (z < zf) return 1;  // unseen below the shelf: its open side is up
+      if (z == zf || in_box(x, y, z, x0 + 6, 6, zf + 1, x0 + 9, 9, zf + 4)) return 2;  // shelf, box
+      return 0;
+    }
+    return in_box(x, y, z, 64, 4, 3, 67, 7, 6) ? 2 : (z < 2 ? 1 : 0);  // a lone box
+  };
+  const Dims d{70, 18, 20};
+  Scene one(d, shelves);
+  one.label_and_split(200);
+  ASSERT_EQ(one.segments.size(), one.before + 3) << "a box split off each shelf";
+  for (int k = 0; k < 3; ++k)
+    EXPECT_NE(one.at(20 * k + 7, 7, 3 + 6 * k), one.at(20 * k + 1, 1, 2 + 6 * k)) << "shelf " << k;
+  for (int threads : {2, 3}) {
+    Scene s(d, shelves);
+    label_components(s.states, s.grid, s.labels, s.segments, 1, true);
+    split_support_planes(s.grid, s.labels, s.segments, 200, true, threads);
+    EXPECT_EQ(s.labels, one.labels) << threads << " threads";
+    ASSERT_EQ(s.segments.size(), one.segments.size());
+    for (std::size_t i = 0; i < s.segments.size(); ++i) {
+      EXPECT_EQ(s.segments[i].voxels, one.segments[i].voxels) << i;
+      EXPECT_EQ(s.segments[i].mop, one.segments[i].mop) << i;
+      EXPECT_EQ(s.segments[i].centroid, one.segments[i].centroid) << i;
+    }
+  }
+}
+
 TEST(Planes, BoxStandingOnAFloorBecomesItsOwnSegment) {
   Scene s(Dims{30, 30, 12}, floor_with_box);
   s.label_and_split(256);

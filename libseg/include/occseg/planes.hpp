@@ -50,9 +50,10 @@ bool fit_dominant_plane(const std::vector<std::array<double, 3>>& points, std::u
 // segment, whose first component keeps its id (further components get new ids too, or join the
 // object they touch when smaller than kMinObjectVoxels). A segment whose best plane holds under
 // 40 % of a 4096-voxel sample is dropped before its voxels are listed. Statistics of changed
-// segments are recomputed. Segments are examined one after the other; the plane search of each
-// scores its candidate planes on up to `threads` threads (0: all cores), and results never
-// depend on the thread count.
+// segments are recomputed. The plane searches run first, several segments at once on up to
+// `threads` threads (0: all cores; or one segment's candidate planes over them when it is the
+// only one), then the splits one segment after the other; results never depend on the thread
+// count.
 void split_support_planes(const Grid& grid, std::vector<std::uint32_t>& labels, std::vector<Segment>& segments,
                           std::size_t min_plane, bool occupied26, int threads = 1);
 
