@@ -5,6 +5,7 @@
 #include <mutex>
 
 #include "occseg/parallel.hpp"
+#include "bit_rows_internal.hpp"
 #include "huge_pages.hpp"
 #include "own_states_internal.hpp"
 #include "occseg/refine.hpp"
@@ -24,19 +25,18 @@ constexpr std::uint8_t kOccupied = static_cast<std::uint8_t>(State::occupied);
 // The opening works on bit masks, 64 voxels of a row per word: its six passes then stream 1/8 of
 // the memory the byte masks took (13 MB per pass on a 320 x 320 x 128 map). Row r of the mask is
 // words [r * W, (r + 1) * W), W = ceil(nx / 64), voxel x at bit x % 64 of word x / 64; the bits
-// past nx in a row's last word are kept 0. The words live in the mask's own vector, or in
-// scratch storage handed in (segment() gives part of the label array, which then holds no labels
-// yet); word_t may alias that storage's type (see codes_internal.hpp).
-typedef std::uint64_t __attribute__((__may_alias__)) word_t;
+// past nx in a row's last word are kept 0 (bit_rows_internal.hpp). The words live in the mask's
+// own vector, or in scratch storage handed in (segment() gives part of the label array, which
+// then holds no labels yet); every row is written before it is read, so that storage is not
+// cleared.
+using detail::word_t;
 struct BitMask {
   std::size_t nx = 0, rows = 0, W = 0;
   std::vector<std::uint64_t> own_words;
   word_t* w = nullptr;
-  BitMask(std::size_t nx_, std::size_t rows_, void* storage = nullptr, bool clear = true)
-      : nx(nx_), rows(rows_), W((nx_ + 63) / 64) {
+  BitMask(std::size_t nx_, std::size_t rows_, void* storage = nullptr) : nx(nx_), rows(rows_), W((nx_ + 63) / 64) {
     if (storage) {
       w = static_cast<word_t*>(storage);
-      if (clear) std::fill(w, w + rows * W, std::uint64_t(0));
     } else {
       own_words.assign(rows * W, 0);
       w = reinterpret_cast<word_t*>(own_words.data());
@@ -110,11 +110,8 @@ void pack_half(const std::uint8_t* own, std::size_t nx, word_t* bits) {
   std::size_t x = 0;
 #ifdef __SSE2__
   const __m128i half = _mm_set1_epi8(static_cast<char>(kUnknown));
-  for (; x + 16 <= nx; x += 16) {
-    const auto m = static_cast<std::uint64_t>(static_cast<unsigned>(
-        _mm_movemask_epi8(_mm_cmpeq_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(own + x)), half))));
-    bits[x / 64] |= m << (x % 64);
-  }
+  for (; x + 16 <= nx; x += 16)
+    detail::set_bits16(bits, x, _mm_cmpeq_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(own + x)), half));
 #endif
   for (; x < nx; ++x) bits[x / 64] |= static_cast<std::uint64_t>(own[x] == kUnknown) << (x % 64);
 }
@@ -124,13 +121,9 @@ void pack_half(const std::uint8_t* own, std::size_t nx, word_t* bits) {
 void unpack_half(const word_t* bits, const std::uint8_t* own, std::size_t nx, std::uint8_t* out) {
   std::size_t x = 0;
 #ifdef __SSE2__
-  const __m128i sel = _mm_setr_epi8(1, 2, 4, 8, 16, 32, 64, -128, 1, 2, 4, 8, 16, 32, 64, -128);
   const __m128i one = _mm_set1_epi8(1), half = _mm_set1_epi8(static_cast<char>(kUnknown));
   for (; x + 16 <= nx; x += 16) {
-    const auto b = static_cast<std::uint16_t>(bits[x / 64] >> (x % 64));
-    const __m128i spread = _mm_set_epi64x(static_cast<long long>((b >> 8) * 0x0101010101010101ull),
-                                          static_cast<long long>((b & 0xFFu) * 0x0101010101010101ull));
-    const __m128i set = _mm_cmpeq_epi8(_mm_and_si128(spread, sel), sel);
+    const __m128i set = detail::bytes_of_bits16(bits, x);
     const __m128i is_half = _mm_cmpeq_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(own + x)), half);
     _mm_storeu_si128(reinterpret_cast<__m128i*>(out + x), _mm_and_si128(_mm_and_si128(set, is_half), one));
   }
@@ -190,10 +183,9 @@ BitMask region_bits(const std::uint8_t* own, const Dims& d, const Params& params
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, rows = ny * nz, bytes = BitMask::bytes(nx, rows);
   const int r = params.gap_radius;
   // Three masks in the scratch when it holds them (not for very narrow maps: a word per row).
-  // Every row of a mask is written before it is read (bits past nx are 0): no clearing.
   const bool fits = scratch && 3 * bytes <= scratch_bytes;
-  BitMask a(nx, rows, fits ? scratch : nullptr, false), b(nx, r > 0 ? rows : 0, fits ? scratch + bytes : nullptr, false),
-      c(nx, r > 0 ? rows : 0, fits ? scratch + 2 * bytes : nullptr, false);
+  BitMask a(nx, rows, fits ? scratch : nullptr), b(nx, r > 0 ? rows : 0, fits ? scratch + bytes : nullptr),
+      c(nx, r > 0 ? rows : 0, fits ? scratch + 2 * bytes : nullptr);
   if (r <= 0) {  // no opening: every 0.5 voxel is in a region
     parallel_for_dynamic(rows, params.threads, [&](std::size_t r0, std::size_t r1) {
       for (std::size_t rw = r0; rw < r1; ++rw) pack_half(own + rw * nx, nx, a.row(rw));

@@ -12,11 +12,8 @@
 #include <algorithm>
 
 #include "occseg/parallel.hpp"
+#include "bit_rows_internal.hpp"
 #include "own_states_internal.hpp"
-
-#ifdef __SSE2__
-#include <emmintrin.h>
-#endif
 
 namespace occseg::detail {
 
@@ -24,9 +21,6 @@ namespace {
 
 constexpr std::uint8_t kFree = static_cast<std::uint8_t>(State::free);
 constexpr std::uint8_t kUnknown = static_cast<std::uint8_t>(State::unknown);
-
-// The masks may live in storage of another type (the label array): word_t may alias it.
-typedef std::uint64_t __attribute__((__may_alias__)) word_t;
 
 // W and C of one row of voxels (bits past nx stay 0).
 void pack_row(const std::uint8_t* st, const std::uint8_t* own, std::size_t nx, word_t* w, word_t* c) {
@@ -39,11 +33,8 @@ void pack_row(const std::uint8_t* st, const std::uint8_t* own, std::size_t nx, w
   for (; x + 16 <= nx; x += 16) {
     const __m128i s = _mm_loadu_si128(reinterpret_cast<const __m128i*>(st + x));
     const __m128i o = _mm_loadu_si128(reinterpret_cast<const __m128i*>(own + x));
-    const auto mw = static_cast<std::uint64_t>(static_cast<unsigned>(_mm_movemask_epi8(_mm_cmpeq_epi8(s, unknown))));
-    const auto mc = static_cast<std::uint64_t>(static_cast<unsigned>(
-        _mm_movemask_epi8(_mm_and_si128(_mm_cmpeq_epi8(s, free), _mm_cmpeq_epi8(o, unknown)))));
-    w[x / 64] |= mw << (x % 64);
-    c[x / 64] |= mc << (x % 64);
+    set_bits16(w, x, _mm_cmpeq_epi8(s, unknown));
+    set_bits16(c, x, _mm_and_si128(_mm_cmpeq_epi8(s, free), _mm_cmpeq_epi8(o, unknown)));
   }
 #endif
   for (; x < nx; ++x) {
@@ -56,13 +47,9 @@ void pack_row(const std::uint8_t* st, const std::uint8_t* own, std::size_t nx, w
 void unpack_row(const word_t* w, std::size_t nx, std::uint8_t* st) {
   std::size_t x = 0;
 #ifdef __SSE2__
-  const __m128i sel = _mm_setr_epi8(1, 2, 4, 8, 16, 32, 64, -128, 1, 2, 4, 8, 16, 32, 64, -128);
   const __m128i unknown = _mm_set1_epi8(static_cast<char>(kUnknown));
   for (; x + 16 <= nx; x += 16) {
-    const auto b = static_cast<std::uint16_t>(w[x / 64] >> (x % 64));
-    const __m128i spread = _mm_set_epi64x(static_cast<long long>((b >> 8) * 0x0101010101010101ull),
-                                          static_cast<long long>((b & 0xFFu) * 0x0101010101010101ull));
-    const __m128i set = _mm_cmpeq_epi8(_mm_and_si128(spread, sel), sel);
+    const __m128i set = bytes_of_bits16(w, x);
     __m128i* p = reinterpret_cast<__m128i*>(st + x);
     _mm_storeu_si128(p, _mm_or_si128(_mm_and_si128(set, unknown), _mm_andnot_si128(set, _mm_loadu_si128(p))));
   }
