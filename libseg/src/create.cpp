@@ -75,18 +75,21 @@ bool create_by_rows(const Grid& grid, const std::vector<Block>& blocks, const Pa
       if (b.lo[a] % c || (b.hi[a] != dim[a] && b.hi[a] % c)) return false;  // off the lattice
     }
   const std::size_t ncx = (d.nx + c - 1) / c, ncy = (d.ny + c - 1) / c, ncz = (d.nz + c - 1) / c;
-  // Which block each cell belongs to; every cell exactly once, or this is no tiling.
-  std::vector<std::uint32_t> cell(ncx * ncy * ncz, ~0u);
-  for (std::size_t k = 0; k < blocks.size(); ++k) {
-    const Block& b = blocks[k];
+  // fn(index of the cell) for the cells of block b, in scan order.
+  const auto for_cells = [&](const Block& b, auto&& fn) {
     for (std::size_t z = b.lo[2] / c; z < (b.hi[2] + c - 1) / c; ++z)
       for (std::size_t y = b.lo[1] / c; y < (b.hi[1] + c - 1) / c; ++y)
-        for (std::size_t x = b.lo[0] / c; x < (b.hi[0] + c - 1) / c; ++x) {
-          std::uint32_t& id = cell[x + ncx * (y + ncy * z)];
-          if (id != ~0u) return false;
-          id = static_cast<std::uint32_t>(k);
-        }
-  }
+        for (std::size_t x = b.lo[0] / c; x < (b.hi[0] + c - 1) / c; ++x) fn(x + ncx * (y + ncy * z));
+  };
+  // Which block each cell belongs to; every cell exactly once, or this is no tiling.
+  std::vector<std::uint32_t> cell(ncx * ncy * ncz, ~0u);
+  bool tiling = true;
+  for (std::size_t k = 0; k < blocks.size() && tiling; ++k)
+    for_cells(blocks[k], [&](std::size_t i) {
+      tiling = tiling && cell[i] == ~0u;
+      cell[i] = static_cast<std::uint32_t>(k);
+    });
+  if (!tiling) return false;
   for (std::uint32_t id : cell)
     if (id == ~0u) return false;
 
@@ -123,13 +126,9 @@ bool create_by_rows(const Grid& grid, const std::vector<Block>& blocks, const Pa
     for (std::size_t k = k0; k < k1; ++k) {
       const Block& b = blocks[k];
       double sum = 0;
-      for (std::size_t z = b.lo[2] / c; z < (b.hi[2] + c - 1) / c; ++z)
-        for (std::size_t y = b.lo[1] / c; y < (b.hi[1] + c - 1) / c; ++y)
-          for (std::size_t x = b.lo[0] / c; x < (b.hi[0] + c - 1) / c; ++x) sum += cell_sum[x + ncx * (y + ncy * z)];
+      for_cells(b, [&](std::size_t i) { sum += cell_sum[i]; });
       const auto st = static_cast<std::uint8_t>(params.state_of(sum / static_cast<double>(b.volume())));
-      for (std::size_t z = b.lo[2] / c; z < (b.hi[2] + c - 1) / c; ++z)
-        for (std::size_t y = b.lo[1] / c; y < (b.hi[1] + c - 1) / c; ++y)
-          for (std::size_t x = b.lo[0] / c; x < (b.hi[0] + c - 1) / c; ++x) cell_state[x + ncx * (y + ncy * z)] = st;
+      for_cells(b, [&](std::size_t i) { cell_state[i] = st; });
     }
   });
   parallel_for(d.ny * d.nz, params.threads, [&](std::size_t r0, std::size_t r1) {

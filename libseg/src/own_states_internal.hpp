@@ -50,7 +50,7 @@ std::vector<std::uint8_t> create_segments_and_own_states(const Grid& grid, const
 
 // The refinement steps and the default rules with the own states in any storage (the public
 // versions take a vector; segment() keeps them in the label array). `scratch` (8-byte aligned,
-// or nullptr) may hold the rules' two bit masks of the opening if it has room.
+// or nullptr) may hold the rules' three bit masks of the opening if it has room.
 void refine_unknown(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& dims, const Params& params);
 void refine_boundaries(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& dims,
                        const Params& params);

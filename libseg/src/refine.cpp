@@ -333,7 +333,7 @@ void detail::refine_boundaries(std::vector<std::uint8_t>& st, const std::uint8_t
 void detail::refine(std::vector<std::uint8_t>& st, const std::uint8_t* own, const Dims& d, const Params& params,
                     std::uint8_t* scratch, std::size_t scratch_bytes) {
   grow_unknown(st, own, d, params.threads, scratch, scratch_bytes);
-  run_sweeps(st, own, d, params.threads, lookahead_of(params), boundary_sweeps(params));
+  detail::refine_boundaries(st, own, d, params);
 }
 
 void refine_boundaries(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
