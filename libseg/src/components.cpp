@@ -163,7 +163,7 @@ inline double run_sum(const float* v, std::size_t n) {
 // lies in one component), as its union-find parent, then as its slab-local component number.
 // Filling every voxel's entry in the first two passes moved 200 MB more on a 320 x 320 x 128 map.
 void label_states(const std::uint8_t* s, std::vector<std::uint8_t>* release, const Grid& g,
-                  std::vector<std::uint32_t>& labels, std::vector<Segment>& segments, int threads, bool occupied26) {
+                  LabelArray& labels, std::vector<Segment>& segments, int threads, bool occupied26) {
   const std::size_t n = g.dims.count();
   detail::check_labels_fit(n);
   const std::size_t nx = g.dims.nx, ny = g.dims.ny, nz = g.dims.nz, sz = nx * ny;
@@ -387,12 +387,12 @@ void detail::check_labels_fit(std::size_t voxels) {
                                          " voxels exceed the uint32 labels (at most 2^32 - 2 voxels)");
 }
 
-void label_components(const std::vector<std::uint8_t>& states, const Grid& grid, std::vector<std::uint32_t>& labels,
+void label_components(const std::vector<std::uint8_t>& states, const Grid& grid, LabelArray& labels,
                       std::vector<Segment>& segments, int threads, bool occupied26) {
   label_states(states.data(), nullptr, grid, labels, segments, threads, occupied26);
 }
 
-void label_components(std::vector<std::uint8_t>&& states, const Grid& grid, std::vector<std::uint32_t>& labels,
+void label_components(std::vector<std::uint8_t>&& states, const Grid& grid, LabelArray& labels,
                       std::vector<Segment>& segments, int threads, bool occupied26) {
   label_states(states.data(), &states, grid, labels, segments, threads, occupied26);
 }

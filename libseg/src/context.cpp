@@ -30,7 +30,7 @@ struct Context::Pool {
   bool stop = false;
   std::exception_ptr first;
   std::mutex spare_mutex;
-  std::vector<std::uint32_t> spare_labels;  // from recycle(), for the next segment()
+  LabelArray spare_labels;  // from recycle(), for the next segment()
 
   void work(std::size_t k) {
     std::uint64_t seen = 0;
@@ -106,7 +106,7 @@ Context::~Context() {
 int Context::threads() const { return static_cast<int>(pool_->workers.size()) + 1; }
 
 void Context::recycle(Result&& result) {
-  std::vector<std::uint32_t> labels = std::move(result.labels);
+  LabelArray labels = std::move(result.labels);
   result = Result();
   std::lock_guard<std::mutex> lock(pool_->spare_mutex);
   pool_->spare_labels.swap(labels);  // the older array, if any, is freed outside the lock
@@ -135,7 +135,7 @@ void run_on_pool(Context* context, std::size_t n, int threads,
 }
 
 Result segment(Context& context, const Grid& grid, const Params& params, bool keep_stages) {
-  std::vector<std::uint32_t> labels;
+  LabelArray labels;
   {
     std::lock_guard<std::mutex> lock(context.pool_->spare_mutex);
     labels.swap(context.pool_->spare_labels);

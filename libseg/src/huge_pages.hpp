@@ -11,11 +11,17 @@ namespace occseg {
 // advised. A hint: does nothing elsewhere or when refused. Call before the first touch.
 void advise_huge_pages(void* p, std::size_t bytes);
 
-// v.resize(n), with fresh storage advised before the new elements are written.
-template <class T>
-void resize_huge(std::vector<T>& v, std::size_t n) {
+// Writes a zero byte into every 4 KB page of [p, p + bytes), the pages split over `threads`: fresh
+// pages are faulted in (and zeroed by the kernel) in parallel instead of by whichever stage
+// touches them first. The contents are garbage afterwards (scratch only).
+void touch_pages(void* p, std::size_t bytes, int threads);
+
+// v.resize(n), with fresh storage advised before the new elements are written (or, for an
+// UninitVector, before the stages first touch them).
+template <class T, class A>
+void resize_huge(std::vector<T, A>& v, std::size_t n) {
   if (v.capacity() < n) {
-    std::vector<T> fresh;
+    std::vector<T, A> fresh;
     fresh.reserve(n);
     advise_huge_pages(fresh.data(), n * sizeof(T));
     fresh.assign(v.begin(), v.end());

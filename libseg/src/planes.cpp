@@ -291,7 +291,7 @@ namespace {
 // One pass of the split over segment `s`; state shared between its steps.
 class Splitter {
  public:
-  Splitter(const Grid& g, std::vector<std::uint32_t>& labels, std::vector<Segment>& segments, bool occupied26)
+  Splitter(const Grid& g, LabelArray& labels, std::vector<Segment>& segments, bool occupied26)
       : g_(g), d_(g.dims), labels_(labels), segs_(segments), conn26_(occupied26) {}
 
   // Examines segment `s`. Its voxels are [first, last) in scan order when the caller bucketed
@@ -600,7 +600,7 @@ class Splitter {
 
   const Grid& g_;
   const Dims d_;
-  std::vector<std::uint32_t>& labels_;
+  LabelArray& labels_;
   std::vector<Segment>& segs_;
   const bool conn26_;
   Plane plane_;
@@ -611,7 +611,7 @@ class Splitter {
 
 }  // namespace
 
-void split_support_planes(const Grid& grid, std::vector<std::uint32_t>& labels, std::vector<Segment>& segments,
+void split_support_planes(const Grid& grid, LabelArray& labels, std::vector<Segment>& segments,
                           std::size_t min_plane, bool occupied26, int threads) {
   if (min_plane == 0) return;
   // Candidates: occupied segments big enough for a plane and an object. Their voxels are found by

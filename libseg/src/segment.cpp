@@ -93,10 +93,10 @@ void check_map(const Grid& grid, int threads, bool values) {
 }  // namespace
 
 Result segment(const Grid& grid, const Params& params, bool keep_stages) {
-  return segment_into(grid, params, keep_stages, std::vector<std::uint32_t>());
+  return segment_into(grid, params, keep_stages, LabelArray());
 }
 
-Result segment_into(const Grid& grid, const Params& params, bool keep_stages, std::vector<std::uint32_t>&& labels) {
+Result segment_into(const Grid& grid, const Params& params, bool keep_stages, LabelArray&& labels) {
   params.validate();
   // The built-in texture operator checks the values itself (compute_texture); plugins get a
   // checked map.
@@ -106,7 +106,7 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, st
   r.dims = grid.dims;
   // A recycled array large enough is kept (resize_huge below); a smaller one would only be copied
   // into fresh storage.
-  if (labels.capacity() < grid.dims.count()) labels = std::vector<std::uint32_t>();
+  if (labels.capacity() < grid.dims.count()) labels = LabelArray();
   r.labels = std::move(labels);
   Stages st(params, r);
 
@@ -122,6 +122,7 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, st
   st.begin("texture");
   if (op && op->native_into) {
     resize_huge(r.labels, n);
+    touch_pages(r.labels.data(), n * sizeof(std::uint32_t), params.threads);
     // codes in bytes [0, 2n), the operator's scratch (LBP codes) in [2n, 3n)
     std::uint8_t* const bytes = reinterpret_cast<std::uint8_t*>(r.labels.data());
     const int codes = op->native_into(grid, params, reinterpret_cast<std::uint16_t*>(bytes), bytes + 2 * n);

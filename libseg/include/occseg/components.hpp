@@ -6,6 +6,7 @@
 
 #include "occseg/grid.hpp"
 #include "occseg/params.hpp"
+#include "occseg/uninit_vector.hpp"
 
 namespace occseg {
 
@@ -32,11 +33,11 @@ constexpr std::size_t kLabelSlab = 8;
 // Error(unsupported) beyond 2^32-1 voxels, since labels are uint32. `threads` as in Params
 // (0: all cores); results never depend on it.
 void label_components(const std::vector<std::uint8_t>& states, const Grid& grid,
-                      std::vector<std::uint32_t>& labels, std::vector<Segment>& segments, int threads = 0,
+                      LabelArray& labels, std::vector<Segment>& segments, int threads = 0,
                       bool occupied26 = false);
 // The same, taking the states over: they are freed (left empty) as soon as the components are
 // known, before the statistics pass (which finds its runs in 1/8 byte per voxel of bits).
-void label_components(std::vector<std::uint8_t>&& states, const Grid& grid, std::vector<std::uint32_t>& labels,
+void label_components(std::vector<std::uint8_t>&& states, const Grid& grid, LabelArray& labels,
                       std::vector<Segment>& segments, int threads = 0, bool occupied26 = false);
 
 }  // namespace occseg

@@ -54,7 +54,7 @@ bool fit_dominant_plane(const std::vector<std::array<double, 3>>& points, std::u
 // `threads` threads (0: all cores; or one segment's candidate planes over them when it is the
 // only one), then the splits one segment after the other; results never depend on the thread
 // count.
-void split_support_planes(const Grid& grid, std::vector<std::uint32_t>& labels, std::vector<Segment>& segments,
+void split_support_planes(const Grid& grid, LabelArray& labels, std::vector<Segment>& segments,
                           std::size_t min_plane, bool occupied26, int threads = 1);
 
 namespace detail {

@@ -8,6 +8,7 @@
 #include "occseg/divide.hpp"
 #include "occseg/grid.hpp"
 #include "occseg/params.hpp"
+#include "occseg/uninit_vector.hpp"
 
 namespace occseg {
 
@@ -18,7 +19,7 @@ struct StageTime {
 
 struct Result {
   Dims dims;
-  std::vector<std::uint32_t> labels;  // segment id per voxel, x fastest
+  LabelArray labels;                  // segment id per voxel, x fastest (not zeroed on allocation)
   std::vector<Segment> segments;      // index = id
   std::vector<StageTime> timings;
   // Filled only when segment() is asked to keep stages (for pictures of Figures 5-7):
