@@ -118,7 +118,7 @@ void BM_VoxelRules(benchmark::State& state) {
 
 void BM_Labelling(benchmark::State& state) {
   const Inputs& in = inputs(static_cast<int>(state.range(0)));
-  std::vector<std::uint32_t> labels;
+  LabelArray labels;
   std::vector<Segment> segments;
   const int threads = static_cast<int>(state.range(1));
   for (auto _ : state) label_components(in.refined_default, in.grid, labels, segments, threads);
@@ -128,7 +128,7 @@ void BM_Labelling(benchmark::State& state) {
 // The default preset's support-plane split after labelling (one thread by design).
 void BM_SupportPlanes(benchmark::State& state) {
   const Inputs& in = inputs(static_cast<int>(state.range(0)));
-  std::vector<std::uint32_t> labels0, labels;
+  LabelArray labels0, labels;
   std::vector<Segment> segments0, segments;
   label_components(in.refined_default, in.grid, labels0, segments0, 2, true);
   for (auto _ : state) {

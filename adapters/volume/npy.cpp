@@ -196,7 +196,7 @@ void write_grid_npy_as(const std::string& path, const Grid& g, const std::string
   throw Error(Status::invalid_argument, "cannot write a map as dtype '" + descr + "' (use <f4, <f8, |u1 or <u2)");
 }
 
-void write_labels_npy(const std::string& path, const Dims& d, const std::vector<std::uint32_t>& labels) {
+void write_labels_npy(const std::string& path, const Dims& d, const LabelArray& labels) {
   write_npy(path, "<u4", {d.nz, d.ny, d.nx}, labels.data(), labels.size() * sizeof(std::uint32_t));
 }
 

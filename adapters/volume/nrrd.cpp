@@ -306,7 +306,7 @@ void write_grid_nrrd(const std::string& path, const Grid& g) {
              "occupancy probability");
 }
 
-void write_labels_nrrd(const std::string& path, const Grid& g, const std::vector<std::uint32_t>& labels) {
+void write_labels_nrrd(const std::string& path, const Grid& g, const LabelArray& labels) {
   if (labels.size() != g.dims.count())
     throw Error(Status::invalid_argument, "write_labels_nrrd: " + std::to_string(labels.size()) +
                                               " labels for " + std::to_string(g.dims.count()) + " voxels");

@@ -60,7 +60,7 @@ TEST(Nrrd, MapRoundTripKeepsValuesAndGeometry) {
 
 TEST(Nrrd, LabelsAreUint32AndNotAMap) {
   const Grid g = ramp();
-  std::vector<std::uint32_t> labels(g.p.size());
+  LabelArray labels(g.p.size());
   for (std::size_t i = 0; i < labels.size(); ++i) labels[i] = std::uint32_t(i * 1000003u);
   const std::string f = tmp("labels.nrrd");
   write_labels_nrrd(f, g, labels);

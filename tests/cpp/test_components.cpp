@@ -16,10 +16,10 @@ TEST(Components, LabelsInScanOrderWithStats) {
   //                   1 1 0 0
   const std::vector<std::uint8_t> st{0, 0, 2, 2, 1, 0, 0, 2, 1, 1, 0, 0};
   for (std::size_t i = 0; i < st.size(); ++i) g.p[i] = st[i] == 2 ? 0.9f : (st[i] == 1 ? 0.5f : 0.1f);
-  std::vector<std::uint32_t> labels;
+  LabelArray labels;
   std::vector<Segment> segs;
   label_components(st, g, labels, segs);
-  EXPECT_EQ(labels, (std::vector<std::uint32_t>{0, 0, 1, 1, 2, 0, 0, 1, 2, 2, 0, 0}));
+  EXPECT_EQ(labels, (LabelArray{0, 0, 1, 1, 2, 0, 0, 1, 2, 2, 0, 0}));
   ASSERT_EQ(segs.size(), 3u);
   EXPECT_EQ(segs[0].state, State::free);
   EXPECT_EQ(segs[0].voxels, 6u);
@@ -37,10 +37,10 @@ TEST(Components, UShapeMergesLate) {
   // A U of state 2 whose arms meet only at the bottom row: one component, id by first voxel.
   Grid g(Dims{3, 3, 1}, 0.2f);
   const std::vector<std::uint8_t> st{2, 0, 2, 2, 0, 2, 2, 2, 2};
-  std::vector<std::uint32_t> labels;
+  LabelArray labels;
   std::vector<Segment> segs;
   label_components(st, g, labels, segs);
-  EXPECT_EQ(labels, (std::vector<std::uint32_t>{0, 1, 0, 0, 1, 0, 0, 0, 0}));
+  EXPECT_EQ(labels, (LabelArray{0, 1, 0, 0, 1, 0, 0, 0, 0}));
   EXPECT_EQ(segs.size(), 2u);
   EXPECT_EQ(segs[0].voxels, 7u);
 }
@@ -48,7 +48,7 @@ TEST(Components, UShapeMergesLate) {
 TEST(Components, DiagonalIsNotConnected) {
   Grid g(Dims{2, 2, 2}, 0.2f);
   const std::vector<std::uint8_t> st{2, 0, 0, 0, 0, 0, 0, 2};
-  std::vector<std::uint32_t> labels;
+  LabelArray labels;
   std::vector<Segment> segs;
   label_components(st, g, labels, segs);
   EXPECT_EQ(segs.size(), 3u);
@@ -59,7 +59,7 @@ TEST(Components, OccupiedDiagonalsJoinWith26Connectivity) {
   // Two occupied voxels meeting at a corner, two free voxels meeting at a corner.
   Grid g(Dims{2, 2, 2}, 0.2f);
   const std::vector<std::uint8_t> st{2, 1, 1, 0, 1, 0, 1, 2};
-  std::vector<std::uint32_t> labels;
+  LabelArray labels;
   std::vector<Segment> segs;
   label_components(st, g, labels, segs, 1, true);
   EXPECT_EQ(labels[0], labels[7]) << "occupied: corner contact joins";
@@ -74,7 +74,7 @@ TEST(Components, SlopedShellAcrossSlabsIsOneSegment) {
   std::vector<std::uint8_t> st(g.p.size(), 0);
   for (std::size_t k = 0; k < 20; ++k) st[g.index(k, k, k)] = 2;
   for (int threads : {1, 3}) {
-    std::vector<std::uint32_t> labels;
+    LabelArray labels;
     std::vector<Segment> segs;
     label_components(st, g, labels, segs, threads, true);
     EXPECT_EQ(segs.size(), 2u);
@@ -102,7 +102,7 @@ TEST(Components, StatisticsMatchTheLabelledVoxelsAndTakingStatesOverChangesNothi
   for (std::size_t i = 0; i < st.size(); ++i) g.p[i] = 0.05f + 0.3f * st[i] + 0.001f * float(i % 7);
   for (bool occ26 : {false, true})
     for (int threads : {1, 3}) {
-      std::vector<std::uint32_t> labels, labels2;
+      LabelArray labels, labels2;
       std::vector<Segment> segs, segs2;
       label_components(st, g, labels, segs, threads, occ26);
       std::vector<std::uint8_t> copy = st;
@@ -166,7 +166,7 @@ TEST(Components, RunsAreSummedInEightLanes) {
     const Dims d{len, 1, 1};
     Grid g(d, std::ldexp(1.0f, -54));
     g.p[0] = 1.0f;
-    std::vector<std::uint32_t> labels;
+    LabelArray labels;
     std::vector<Segment> segs;
     label_components(std::vector<std::uint8_t>(len, 0), g, labels, segs, 1);
     ASSERT_EQ(segs.size(), 1u);
@@ -188,7 +188,7 @@ TEST(Components, RunsAreSummedInEightLanes) {
     const std::size_t x = i % d.nx, row = i / d.nx;
     st[i] = (x >= 3 + row % 4 && x < 20 + row % 7) ? 2 : 0;
   }
-  std::vector<std::uint32_t> labels;
+  LabelArray labels;
   std::vector<Segment> segs;
   label_components(st, g, labels, segs, 2);
   std::vector<double> sum(segs.size(), 0.0);
@@ -216,7 +216,7 @@ TEST(Components, SlabSharesAreAddedInSlabOrderWhateverFinishesFirst) {
   auto next = [&] { return r = r * 1664525u + 1013904223u; };
   const std::size_t slab0 = d.nx * d.ny * kLabelSlab;
   for (std::size_t i = 0; i < slab0; ++i) st[i] = static_cast<std::uint8_t>((next() >> 30) % 3);
-  std::vector<std::uint32_t> labels;
+  LabelArray labels;
   std::vector<Segment> segs;
   label_components(st, g, labels, segs, 1, true);  // membership only: it does not depend on p
   const std::uint32_t big = labels.back();         // the free region of slabs 1..15
@@ -276,14 +276,14 @@ TEST(Components, RunsEndingTogetherAcrossASlabBoundaryJoinOnlyWhatTouches) {
   }
   const Grid g(d, 0.5f);
   for (bool occ26 : {false, true}) {
-    std::vector<std::uint32_t> labels;
+    LabelArray labels;
     std::vector<Segment> segs;
     label_components(st, g, labels, segs, 2, occ26);
     const std::uint32_t o = occ26 ? 1 : 4;  // the upper occupied half: its own segment, or the lower's
     const std::uint32_t up = occ26 ? 4 : 5;
-    const std::vector<std::uint32_t> want_z7 = {1, 1, 1, 1, 2, 2, 2, 2}, want_z8 = {3, 3, 3, 3, o, o, o, o};
-    EXPECT_EQ(std::vector<std::uint32_t>(labels.begin() + 56, labels.begin() + 64), want_z7) << occ26;
-    EXPECT_EQ(std::vector<std::uint32_t>(labels.begin() + 64, labels.begin() + 72), want_z8) << occ26;
+    const LabelArray want_z7 = {1, 1, 1, 1, 2, 2, 2, 2}, want_z8 = {3, 3, 3, 3, o, o, o, o};
+    EXPECT_EQ(LabelArray(labels.begin() + 56, labels.begin() + 64), want_z7) << occ26;
+    EXPECT_EQ(LabelArray(labels.begin() + 64, labels.begin() + 72), want_z8) << occ26;
     EXPECT_EQ(labels[0], 0u);
     EXPECT_EQ(labels.back(), up);
     EXPECT_EQ(segs.size(), occ26 ? 5u : 6u);

@@ -44,7 +44,7 @@ struct Scene {
           if (pick(int(x), int(y), int(z))) s.insert(labels[grid.index(x, y, z)]);
     return s;
   }
-  std::vector<std::uint32_t> labels;
+  LabelArray labels;
   std::vector<Segment> segments;
   std::size_t before = 0;
 };

@@ -93,7 +93,7 @@ TEST(SimBaseline, ThresholdsEachVoxelThenLabelsComponents) {
   Grid g(Dims{5, 1, 1});
   g.p = {0.1f, 0.5f, 0.9f, 0.9f, 0.499f};
   const Result r = threshold_segmentation(g, Params::paper());
-  EXPECT_EQ(r.labels, (std::vector<std::uint32_t>{0, 1, 2, 2, 3}));
+  EXPECT_EQ(r.labels, (LabelArray{0, 1, 2, 2, 3}));
   ASSERT_EQ(r.segments.size(), 4u);
   EXPECT_EQ(r.segments[1].state, State::unknown);
   EXPECT_EQ(r.segments[2].voxels, 2u);

@@ -30,7 +30,7 @@ int run(const EvaluateOptions& o) {
   std::vector<std::string> methods;
   std::vector<sim::Scores> scores;
   if (!o.labels.empty()) {
-    const std::vector<std::uint32_t> labels = read_labels(o.labels, t.truth.dims);
+    const LabelArray labels = read_labels(o.labels, t.truth.dims);
     methods.push_back("segmentation");
     scores.push_back(sim::score_segmentation(t.truth, labels, read_segment_states(o.segments), o.reach));
   } else {

@@ -102,7 +102,7 @@ int run(const FiguresOptions& o) {
     all.push_back({{"scene", name}, {"results", results}});
     std::cout << "scene " << name << ": scored paper, default, baseline, ideal" << std::flush;
     if (o.pictures) {
-      std::vector<std::uint32_t> created_labels;
+      LabelArray created_labels;
       std::vector<Segment> created_segments;
       label_components(paper.created_states, map, created_labels, created_segments);
       const std::vector<std::uint8_t> paper_states = voxel_states(paper), default_states = voxel_states(dflt);

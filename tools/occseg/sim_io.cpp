@@ -178,8 +178,9 @@ TruthDir read_truth(const std::string& dir) {
   return t;
 }
 
-std::vector<std::uint32_t> read_labels(const std::string& path, const Dims& dims) {
-  return read_integer_volume(path, nullptr, &dims);
+LabelArray read_labels(const std::string& path, const Dims& dims) {
+  const std::vector<std::uint32_t> v = read_integer_volume(path, nullptr, &dims);
+  return LabelArray(v.begin(), v.end());
 }
 
 std::vector<State> read_segment_states(const std::string& path) {

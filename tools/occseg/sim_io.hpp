@@ -37,7 +37,7 @@ struct TruthDir {
 TruthDir read_truth(const std::string& dir);
 
 // A uint32 (or uint16/uint8) label volume [z, y, x] that must have `dims`.
-std::vector<std::uint32_t> read_labels(const std::string& path, const Dims& dims);
+LabelArray read_labels(const std::string& path, const Dims& dims);
 
 // The state of each segment from a segments.json of `occseg segment` (index = id; ids must be
 // 0..N-1). Throws Error(format) naming the file and the entry.

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "occseg/grid.hpp"
+#include "occseg/uninit_vector.hpp"
 
 namespace occseg {
 
@@ -38,6 +39,6 @@ void write_grid_npy(const std::string& path, const Grid& g);
 // dtypes store round(p * max), which grid_from_npy maps back to within 0.5 / max. Throws
 // Error(invalid_argument) for another dtype.
 void write_grid_npy_as(const std::string& path, const Grid& g, const std::string& descr);
-void write_labels_npy(const std::string& path, const Dims& d, const std::vector<std::uint32_t>& labels);
+void write_labels_npy(const std::string& path, const Dims& d, const LabelArray& labels);
 
 }  // namespace occseg

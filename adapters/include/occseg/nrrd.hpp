@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "occseg/grid.hpp"
+#include "occseg/uninit_vector.hpp"
 
 namespace occseg {
 
@@ -44,6 +45,6 @@ void write_nrrd(const std::string& path, NrrdType type, const Dims& dims, double
                 const std::string& content = "");
 // A map as float, and a label volume (uint32, same geometry as `grid`).
 void write_grid_nrrd(const std::string& path, const Grid& grid);
-void write_labels_nrrd(const std::string& path, const Grid& grid, const std::vector<std::uint32_t>& labels);
+void write_labels_nrrd(const std::string& path, const Grid& grid, const LabelArray& labels);
 
 }  // namespace occseg

@@ -41,7 +41,7 @@ std::vector<std::uint16_t> attribute_to_objects(const Dims& dims, const std::vec
   return owner;
 }
 
-Scores score_segmentation(const Truth& truth, const std::vector<std::uint32_t>& labels,
+Scores score_segmentation(const Truth& truth, const LabelArray& labels,
                           const std::vector<State>& segment_states, int reach) {
   const std::size_t n = truth.dims.count();
   if (truth.state.size() != n || truth.objects.size() != n)

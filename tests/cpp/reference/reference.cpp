@@ -370,7 +370,7 @@ void apply_voxel_rules(std::vector<std::uint8_t>& st, const Grid& g, const Param
     if (mark[i]) st[i] = kUnknown;
 }
 
-void label(const std::vector<std::uint8_t>& st, const Grid& g, std::vector<std::uint32_t>& labels,
+void label(const std::vector<std::uint8_t>& st, const Grid& g, LabelArray& labels,
            std::vector<Segment>& segments, bool occupied26) {
   const std::size_t n = g.dims.count(), nx = g.dims.nx, ny = g.dims.ny, sz = nx * ny;
   labels.resize(n);

@@ -28,14 +28,14 @@ void refine_boundaries(std::vector<std::uint8_t>& states, const Grid& grid, cons
 void apply_voxel_rules(std::vector<std::uint8_t>& states, const Grid& grid, const Params& params);
 // Union-find labelling and the segment table, statistics summed in scan order; occupied voxels
 // 26-connected when `occupied26`, everything else 6-connected.
-void label(const std::vector<std::uint8_t>& states, const Grid& grid, std::vector<std::uint32_t>& labels,
+void label(const std::vector<std::uint8_t>& states, const Grid& grid, LabelArray& labels,
            std::vector<Segment>& segments, bool occupied26 = false);
 
 struct Output {
   std::vector<Block> blocks;
   std::vector<std::uint8_t> created;  // states after creation
   std::vector<std::uint8_t> refined;  // states before labelling
-  std::vector<std::uint32_t> labels;
+  LabelArray labels;
   std::vector<Segment> segments;
 };
 Output segment(const Grid& grid, const Params& params);

@@ -6,6 +6,7 @@
 
 #include "occseg/params.hpp"
 #include "occseg/sim/truth.hpp"
+#include "occseg/uninit_vector.hpp"
 
 namespace occseg::sim {
 
@@ -47,7 +48,7 @@ std::vector<std::uint16_t> attribute_to_objects(const Dims& dims, const std::vec
 // attribution with `reach` (default 3 voxels: three standard deviations of the range noise at
 // the default 4 cm voxels). Throws Error(bad_dims) when sizes differ, Error(out_of_range) naming the voxel
 // when a label has no segment, Error(bad_value) for a truth state above 2.
-Scores score_segmentation(const Truth& truth, const std::vector<std::uint32_t>& labels,
+Scores score_segmentation(const Truth& truth, const LabelArray& labels,
                           const std::vector<State>& segment_states, int reach = 3);
 
 }  // namespace occseg::sim
