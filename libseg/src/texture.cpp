@@ -81,7 +81,13 @@ constexpr std::uint16_t kRecheck = 0xFFFF;
 // value only when the whole interval c +- 1e-6 lies in one step (and above 0); otherwise (about
 // 1 voxel in 100 on noisy maps, fewer on real ones) it is marked kRecheck and recomputed in
 // double by the caller, so the steps are exactly those of texture_unit().
-template <unsigned Present>
+//
+// With Clamp, defined for any float (a NaN or an infinity among the values: the vector kernels'
+// tails, whose rows are checked as they are computed, not before): the float steps are clamped
+// into [-1, kTop] before the conversion, which changes no valid voxel's step. Without it (the
+// rows of the compiler-vectorised kernel, whose map is checked plane by plane ahead of it) the
+// loop vectorises; with it GCC 12 leaves it scalar (6 -> 17 ns per voxel).
+template <unsigned Present, bool Clamp = false>
 inline void contrast_row_impl(const float* p, const std::ptrdiff_t* off, std::size_t n, detail::code_t* out) {
   const std::ptrdiff_t o0 = off[0], o1 = off[1], o2 = off[2], o3 = off[3], o4 = off[4], o5 = off[5];
   constexpr float kErr = 1e-6f, kFine = ContrastQuantizer::kFine;
@@ -102,7 +108,11 @@ inline void contrast_row_impl(const float* p, const std::ptrdiff_t* off, std::si
 #undef OCCSEG_NB
     const float con = s1 / (n1 > 0 ? n1 : 1.0f) - s0 / (n0 > 0 ? n0 : 1.0f);
     const bool two_sided = (n1 > 0) & (n0 > 0);
-    const float lo = (con - kErr) * kFine, hi = (con + kErr) * kFine;  // |con| <= 1: fits an int
+    float lo = (con - kErr) * kFine, hi = (con + kErr) * kFine;  // |con| <= 1 for a valid map
+    if constexpr (Clamp) {  // std::max(-1, v) is -1 for a NaN v
+      lo = std::min(std::max(-1.0f, lo), float(kTop));
+      hi = std::min(std::max(-1.0f, hi), float(kTop));
+    }
     int step = static_cast<int>(lo), step_hi = static_cast<int>(hi);
     step = step < kTop ? step : kTop;
     step_hi = step_hi < kTop ? step_hi : kTop;
@@ -117,7 +127,10 @@ std::uint16_t exact_step(const float* p, const std::ptrdiff_t* off, unsigned pre
   double nb[6];
   for (int k = 0; k < 6; ++k) nb[k] = p[off[k]];
   const TextureUnit u = texture_unit(p[0], nb, present);
-  return u.contrast > 0 ? static_cast<std::uint16_t>(ContrastQuantizer::fine_step(u.contrast) + 1) : 0;
+  // A valid map's contrasts lie in [0, 1]; anything else (NaN, infinities: an invalid map, which
+  // pass 1 reports once it ends) must not reach fine_step's conversion.
+  return u.contrast > 0 && u.contrast <= 1 ? static_cast<std::uint16_t>(ContrastQuantizer::fine_step(u.contrast) + 1)
+                                           : 0;
 }
 
 // LBP codes of `n` consecutive interior voxels.
@@ -159,9 +172,16 @@ void lbp_row_3d(const float* p, const std::ptrdiff_t* off, std::size_t n, std::u
 // the interval itself: it would change the rounding the bound accounts for.
 //
 // With `lbp` (else nullptr), the voxels' LBP codes go there too, from the same comparisons.
-__attribute__((target("avx2"))) void contrast_row_avx2(const float* p, const std::ptrdiff_t* off, std::size_t n,
+//
+// The row's values are checked here too: returns false when one of p[0..n) is not in [0, 1]
+// (NaN included). A map is then rejected after the pass, and its codes are never used; the
+// arithmetic above is defined for any float (the conversions of NaN or huge values give INT_MIN,
+// below every step). Checking the centres as they are loaded replaced a separate check of each
+// plane before its texture (4.6 of 43 ms of this pass on one thread).
+__attribute__((target("avx2"))) bool contrast_row_avx2(const float* p, const std::ptrdiff_t* off, std::size_t n,
                                                        detail::code_t* out, std::uint8_t* lbp = nullptr) {
-  const __m256 zero = _mm256_setzero_ps(), err = _mm256_set1_ps(1e-6f);
+  const __m256 zero = _mm256_setzero_ps(), err = _mm256_set1_ps(1e-6f), one = _mm256_set1_ps(1.0f);
+  __m256 bad = zero;
   const __m256 fine = _mm256_set1_ps(static_cast<float>(ContrastQuantizer::kFine));
   const __m256i top = _mm256_set1_epi32(ContrastQuantizer::kFine - 1), recheck = _mm256_set1_epi32(kRecheck);
   const __m256i inc = _mm256_set1_epi32(1), six = _mm256_set1_epi32(6);
@@ -172,6 +192,7 @@ __attribute__((target("avx2"))) void contrast_row_avx2(const float* p, const std
   std::size_t x = 0;
   for (; x + 8 <= n; x += 8) {
     const __m256 c = _mm256_loadu_ps(p + x);
+    bad = _mm256_or_ps(bad, _mm256_or_ps(_mm256_cmp_ps(c, zero, _CMP_NGE_UQ), _mm256_cmp_ps(c, one, _CMP_NLE_UQ)));
     // Neighbours in pairs (x, y, z), the pair sums added as a tree: three additions deep instead
     // of six, so the chains of successive steps overlap (the error bound holds for any order).
     __m256 s1[3], s0[3];
@@ -211,9 +232,68 @@ __attribute__((target("avx2"))) void contrast_row_avx2(const float* p, const std
       _mm_storel_epi64(reinterpret_cast<__m128i*>(lbp + x), b8);
     }
   }
-  contrast_row_impl<63>(p + x, off, n - x, out + x);
+  contrast_row_impl<63, true>(p + x, off, n - x, out + x);
   if (lbp) lbp_row_impl<63>(p + x, off, n - x, lbp + x);
+  return _mm256_testz_ps(bad, bad) && probabilities_in_range(p + x, n - x);
 }
+
+// contrast_row_avx2 for 16 voxels per step in AVX-512 (F only): the same operations in the same
+// order on each lane, so the same steps, LBP codes and check; comparisons go to mask registers,
+// which removes the and/andnot selections and the register spills of the AVX2 loop (about 105
+// instructions per 8 voxels there). The last n % 16 voxels go to the AVX2 kernel.
+// (GCC 12 warns inside its own AVX-512 intrinsics, whose pass-through operands are deliberately
+// undefined.)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+__attribute__((target("avx512f"))) bool contrast_row_avx512(const float* p, const std::ptrdiff_t* off, std::size_t n,
+                                                            detail::code_t* out, std::uint8_t* lbp) {
+  const __m512 zero = _mm512_setzero_ps(), err = _mm512_set1_ps(1e-6f), one = _mm512_set1_ps(1.0f);
+  const __m512 fine = _mm512_set1_ps(static_cast<float>(ContrastQuantizer::kFine));
+  const __m512i top = _mm512_set1_epi32(ContrastQuantizer::kFine - 1), recheck = _mm512_set1_epi32(kRecheck);
+  const __m512i zeroi = _mm512_setzero_si512(), inc = _mm512_set1_epi32(1), six = _mm512_set1_epi32(6);
+  const __m512 recip = _mm512_setr_ps(1.0f, 1.0f, 1.0f / 2, 1.0f / 3, 1.0f / 4, 1.0f / 5, 1.0f / 6, 1.0f, 1.0f, 1.0f,
+                                      1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f);
+  const std::ptrdiff_t o[6] = {off[0], off[1], off[2], off[3], off[4], off[5]};  // see contrast_row_avx2
+  __mmask16 bad = 0;
+  std::size_t x = 0;
+  for (; x + 16 <= n; x += 16) {
+    const __m512 c = _mm512_loadu_ps(p + x);
+    bad = static_cast<__mmask16>(bad | _mm512_cmp_ps_mask(c, zero, _CMP_NGE_UQ) | _mm512_cmp_ps_mask(c, one, _CMP_NLE_UQ));
+    __m512 s1[3], s0[3];
+    __m512i up_count = zeroi, bits = zeroi;
+    for (int k = 0; k < 3; ++k) {
+      const __m512 v = _mm512_loadu_ps(p + x + o[2 * k]), w = _mm512_loadu_ps(p + x + o[2 * k + 1]);
+      const __mmask16 vu = _mm512_cmp_ps_mask(v, c, _CMP_GE_OQ), wu = _mm512_cmp_ps_mask(w, c, _CMP_GE_OQ);
+      if (lbp) {
+        bits = _mm512_mask_or_epi32(bits, vu, bits, _mm512_set1_epi32(1 << (2 * k)));
+        bits = _mm512_mask_or_epi32(bits, wu, bits, _mm512_set1_epi32(2 << (2 * k)));
+      }
+      s1[k] = _mm512_add_ps(_mm512_maskz_mov_ps(vu, v), _mm512_maskz_mov_ps(wu, w));
+      s0[k] = _mm512_add_ps(_mm512_maskz_mov_ps(static_cast<__mmask16>(~vu), v),
+                            _mm512_maskz_mov_ps(static_cast<__mmask16>(~wu), w));
+      up_count = _mm512_mask_add_epi32(up_count, vu, up_count, inc);
+      up_count = _mm512_mask_add_epi32(up_count, wu, up_count, inc);
+    }
+    const __m512 sum1 = _mm512_add_ps(_mm512_add_ps(s1[0], s1[1]), s1[2]);
+    const __m512 sum0 = _mm512_add_ps(_mm512_add_ps(s0[0], s0[1]), s0[2]);
+    const __m512 con = _mm512_sub_ps(_mm512_mul_ps(sum1, _mm512_permutexvar_ps(up_count, recip)),
+                                     _mm512_mul_ps(sum0, _mm512_permutexvar_ps(_mm512_sub_epi32(six, up_count), recip)));
+    const __mmask16 two_sided = static_cast<__mmask16>(_mm512_cmpgt_epi32_mask(up_count, zeroi) &
+                                                       _mm512_cmpgt_epi32_mask(six, up_count));
+    const __m512 lo = _mm512_mul_ps(_mm512_sub_ps(con, err), fine), hi = _mm512_mul_ps(_mm512_add_ps(con, err), fine);
+    const __m512i step = _mm512_min_epi32(_mm512_cvttps_epi32(lo), top);
+    const __m512i step_hi = _mm512_min_epi32(_mm512_cvttps_epi32(hi), top);
+    const __mmask16 sure = static_cast<__mmask16>(_mm512_cmp_ps_mask(lo, zero, _CMP_GT_OQ) &
+                                                  _mm512_cmpeq_epi32_mask(step, step_hi));
+    const __m512i v = _mm512_mask_blend_epi32(sure, recheck, _mm512_add_epi32(step, inc));
+    // Values <= 0xFFFF (and LBP codes <= 63): truncating to 16 (8) bits keeps them.
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + x), _mm512_cvtepi32_epi16(_mm512_maskz_mov_epi32(two_sided, v)));
+    if (lbp) _mm_storeu_si128(reinterpret_cast<__m128i*>(lbp + x), _mm512_cvtepi32_epi8(bits));
+  }
+  const bool rest = contrast_row_avx2(p + x, off, n - x, out + x, lbp ? lbp + x : nullptr);
+  return bad == 0 && rest;
+}
+#pragma GCC diagnostic pop
 
 // Pass 2 for 8 voxels per step, in place: row[x] = lbp * bins + level, from the parked step
 // v = row[x] (level = (v != 0) + #{k : v > rises[k]}) and the six comparisons of the LBP code
@@ -270,9 +350,14 @@ __attribute__((target("avx2"))) std::size_t codes_from_lbp_avx2(detail::code_t* 
 
 #endif
 
-std::atomic<bool> g_vector_texture{true};
+std::atomic<int> g_texture_kernel{static_cast<int>(detail::TextureKernel::fastest)};
 
-[[maybe_unused]] bool use_avx2_kernel() { return cpu_has_avx2() && g_vector_texture.load(std::memory_order_relaxed); }
+[[maybe_unused]] bool use_avx2_kernel() {
+  return cpu_has_avx2() && g_texture_kernel.load(std::memory_order_relaxed) >= static_cast<int>(detail::TextureKernel::avx2);
+}
+[[maybe_unused]] bool use_avx512_kernel() {
+  return cpu_has_avx512() && g_texture_kernel.load(std::memory_order_relaxed) >= static_cast<int>(detail::TextureKernel::avx512);
+}
 
 // True when some v[x] is kRecheck (branch-free, so it vectorises: rechecks are rare).
 __attribute__((target_clones("avx2", "default")))
@@ -367,18 +452,14 @@ void combine_row(const std::uint8_t* __restrict lbp, const std::uint16_t* __rest
   for (std::size_t x = 0; x < n; ++x) code[x] = static_cast<std::uint16_t>(lbp[x] * bins + lvl[x]);
 }
 
-// Other neighbourhoods (maps with an axis of size 1) are small: no dispatch.
+// The compiler-vectorised kernels (the hand-written ones are picked by the caller). Other
+// neighbourhoods (maps with an axis of size 1) are small: no dispatch.
 template <unsigned P>
 void contrast_any(const float* p, const std::ptrdiff_t* off, std::size_t n, detail::code_t* out, unsigned present) {
   if constexpr (P == 64) {
     (void)p, (void)off, (void)n, (void)out, (void)present;
   } else if (present == P) {
-#ifdef OCCSEG_TEXTURE_AVX2
-    if (P == 63 && use_avx2_kernel()) contrast_row_avx2(p, off, n, out);
-    else if (P == 63) contrast_row_3d(p, off, n, out);
-#else
     if (P == 63) contrast_row_3d(p, off, n, out);
-#endif
     else contrast_row_impl<P>(p, off, n, out);
   } else {
     contrast_any<P + 1>(p, off, n, out, present);
@@ -422,7 +503,7 @@ Stencil stencil(const Dims& d) {
 }  // namespace
 
 namespace detail {
-void set_vector_texture(bool enabled) { g_vector_texture.store(enabled, std::memory_order_relaxed); }
+void set_texture_kernel(TextureKernel k) { g_texture_kernel.store(static_cast<int>(k), std::memory_order_relaxed); }
 }  // namespace detail
 
 namespace {
@@ -454,12 +535,21 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
   // so the total is exact for any thread count).
   const int t = std::max(1, std::min<int>(resolve_threads(threads), static_cast<int>(nz)));
   std::vector<std::vector<std::uint64_t>> part(t, std::vector<std::uint64_t>(4 * kStepStride, 0));
-  // The input check rides along: plane z + 1 is tested just before plane z's texture reads it
-  // (and a chunk's first planes before it starts), so a NaN or out-of-range value never reaches
-  // the arithmetic, and the map is read once for both.
+  // The input check rides along, so the map is read once for both, and the codes of a bad map
+  // are never used: the pass stops and the first bad voxel is named. With the hand-written
+  // kernels each row checks its own values (the interior ones in the kernel, as it loads them):
+  // a bad value may reach the arithmetic of the rows around it before it is seen, which is
+  // defined for any float there. The compiler's kernel is not (float to int conversions): there
+  // plane z + 1 is checked just before plane z's texture reads it (and a chunk's first planes
+  // before it starts), which cost 4.6 of 41 ms on one thread (docs/performance.md, "Sixth round").
   std::atomic<bool> bad_values{false};
+#ifdef OCCSEG_TEXTURE_AVX2
+  const bool by_rows = sten.present == 63 && use_avx2_kernel();
+#else
+  const bool by_rows = false;
+#endif
   const std::size_t plane = nx * ny;
-  auto plane_ok = [&](std::size_t z) { return probabilities_in_range(p + plane * z, plane); };
+  auto plane_ok = [&](std::size_t z) { return by_rows || probabilities_in_range(p + plane * z, plane); };
   parallel_for(static_cast<std::size_t>(t), t, [&](std::size_t b, std::size_t e) {
     for (std::size_t k = b; k < e; ++k) {
       std::uint64_t* h = part[k].data();
@@ -468,25 +558,29 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
       bool ok = (z0 == 0 || plane_ok(z0 - 1)) && plane_ok(z0);
       for (std::size_t z = z0; ok && z < z1; ++z) {
         if (z + 1 < nz && !(ok = plane_ok(z + 1))) break;
-        for (std::size_t y = 0; y < ny; ++y) {
-          // Plane z + 2 is fetched from memory into L2 while plane z is computed, so that the check
-          // of plane z + 1 (above) does not stream from memory with nothing computed meanwhile.
+        for (std::size_t y = 0; ok && y < ny; ++y) {
+          // Plane z + 2 is fetched from memory into L2 while plane z is computed.
           if (z + 2 < nz) prefetch_row(p + nx * (y + ny * (z + 2)), nx * sizeof(float));
           detail::code_t* row = codes + nx * (y + ny * z);
+          const float* const prow = p + nx * (y + ny * z);
           std::size_t x0 = 0, x1 = 0;
           if (!interior_row(d, y, z, x0, x1)) {
             std::fill(row, row + nx, kNoTexture);
+            ok = !by_rows || probabilities_in_range(prow, nx);
             continue;
           }
           std::fill(row, row + x0, kNoTexture);
           std::fill(row + x1, row + nx, kNoTexture);
-          const float* prow0 = p + nx * (y + ny * z) + x0;
+          ok = !by_rows || (probabilities_in_range(prow, x0) && probabilities_in_range(prow + x1, nx - x1));
+          const float* prow0 = prow + x0;
           // With scratch, the LBP codes now, from the contrast kernel's own comparisons: pass 2
           // then reads 3 bytes per voxel instead of the map's rows again.
           std::uint8_t* lrow = lbp_scratch ? lbp_scratch + nx * (y + ny * z) + x0 : nullptr;
 #ifdef OCCSEG_TEXTURE_AVX2
-          if (sten.present == 63 && use_avx2_kernel()) {
-            contrast_row_avx2(prow0, sten.off, x1 - x0, row + x0, lrow);
+          if (sten.present == 63 && use_avx512_kernel()) {
+            ok = contrast_row_avx512(prow0, sten.off, x1 - x0, row + x0, lrow) && ok;
+          } else if (sten.present == 63 && use_avx2_kernel()) {
+            ok = contrast_row_avx2(prow0, sten.off, x1 - x0, row + x0, lrow) && ok;
           } else
 #endif
           {
@@ -494,7 +588,6 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
             if (lrow) lbp_any<0>(prow0, sten.off, x1 - x0, lrow, sten.present);
           }
           if (any_recheck(row + x0, x1 - x0)) {
-            const float* prow = p + nx * (y + ny * z);
             for (std::size_t x = x0; x < x1; ++x)
               if (row[x] == kRecheck) row[x] = exact_step(prow + x, sten.off, sten.present);
           }

@@ -54,10 +54,10 @@ const Case kCases[] = {
 }  // namespace
 
 TEST(Reference, TextureCodesMatch) {
-  // Both contrast kernels: the hand-written AVX2 one (where the processor has AVX2) and the
-  // compiler-vectorised one.
-  for (bool vector_kernel : {true, false}) {
-    detail::set_vector_texture(vector_kernel);
+  // Every contrast kernel: the compiler-vectorised one and the hand-written AVX2 and AVX-512 ones
+  // (each where the processor has it; otherwise the next slower one runs again).
+  for (int vector_kernel = 0; vector_kernel < 3; ++vector_kernel) {
+    detail::set_texture_kernel(static_cast<detail::TextureKernel>(vector_kernel));
     for (const Case& c : kCases) {
       const Grid g = test::random_map(c.dims, c.seed, c.noise);
       const TextureMap ref = reference::texture(g, 8);
@@ -72,7 +72,7 @@ TEST(Reference, TextureCodesMatch) {
       EXPECT_EQ(compute_texture(g, 5, 2).codes, reference::texture(g, 5).codes) << "seed " << c.seed;
     }
   }
-  detail::set_vector_texture(true);
+  detail::set_texture_kernel(detail::TextureKernel::fastest);
 }
 
 TEST(Reference, WholePipelineMatchesForBothPresets) {
@@ -128,12 +128,12 @@ TEST(Reference, ContrastsOnStepBoundariesMatch) {
     const int nudge = r.below(5);
     v = nudge == 0 ? 0.5f : (nudge == 1 ? base : (nudge == 2 ? std::nextafter(base, 1.0f) : (nudge == 3 ? std::nextafter(base, 0.0f) : 0.75f)));
   }
-  for (bool vector_kernel : {true, false}) {
-    detail::set_vector_texture(vector_kernel);
+  for (int vector_kernel = 0; vector_kernel < 3; ++vector_kernel) {
+    detail::set_texture_kernel(static_cast<detail::TextureKernel>(vector_kernel));
     for (int bins : {8, 64})
       EXPECT_EQ(compute_texture(g, bins, 2).codes, reference::texture(g, bins).codes) << bins << " " << vector_kernel;
   }
-  detail::set_vector_texture(true);
+  detail::set_texture_kernel(detail::TextureKernel::fastest);
 }
 
 // The unknown growth on bit masks against the reference's six byte scans, on random per-voxel

@@ -61,9 +61,12 @@ struct TextureMap {
 TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads);
 
 namespace detail {
-// For tests and benchmarks: false makes compute_texture use the compiler-vectorised contrast
-// kernel even where the processor has AVX2 (both give identical codes). Process-wide.
-void set_vector_texture(bool enabled);
+// The contrast kernels of the texture's first pass, slowest first. All give identical codes.
+enum class TextureKernel { compiler = 0, avx2 = 1, avx512 = 2, fastest = 2 };
+// For tests and benchmarks: compute_texture uses the fastest kernel up to `k` that the processor
+// has (the compiler-vectorised one always; the hand-written AVX2 and AVX-512 ones where the
+// processor has them). Process-wide; `fastest` by default.
+void set_texture_kernel(TextureKernel k);
 }  // namespace detail
 
 }  // namespace occseg
