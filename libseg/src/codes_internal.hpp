@@ -23,6 +23,9 @@ void compute_texture_into(const Grid& grid, int contrast_bins, int threads, code
                           std::uint8_t* lbp_scratch = nullptr);
 
 // divide() on codes in any storage: `code_count` distinct codes (TextureMap::code_count()).
-std::vector<Block> divide_codes(const Grid& grid, const code_t* codes, int code_count, const Params& params);
+// faces_only: kNoTexture codes lie only on the map's outer faces (the built-in operator's codes;
+// a plugin may leave any voxel without texture), so blocks inside are counted without a test.
+std::vector<Block> divide_codes(const Grid& grid, const code_t* codes, int code_count, const Params& params,
+                                bool faces_only);
 
 }  // namespace occseg::detail

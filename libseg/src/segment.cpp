@@ -127,7 +127,8 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
     std::uint8_t* const bytes = reinterpret_cast<std::uint8_t*>(r.labels.data());
     const int codes = op->native_into(grid, params, reinterpret_cast<std::uint16_t*>(bytes), bytes + 2 * n);
     st.begin("division");
-    blocks = detail::divide_codes(grid, reinterpret_cast<const detail::code_t*>(r.labels.data()), codes, params);
+    blocks = detail::divide_codes(grid, reinterpret_cast<const detail::code_t*>(r.labels.data()), codes, params,
+                                  /*faces_only=*/true);
   } else {  // a plugin's codes come in their own array: the label array waits for it to go
     TextureMap tex = run_texture(grid, params);
     st.begin("division");

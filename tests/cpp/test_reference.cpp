@@ -94,6 +94,28 @@ TEST(Reference, WholePipelineMatchesForBothPresets) {
   }
 }
 
+// A plugin's codes may leave any voxel without texture (kNoTexture), inside the map too: there
+// the division tests every voxel (only the built-in operator's codes, whose kNoTexture voxels lie
+// on the outer faces, are counted without the test in blocks inside the map).
+TEST(Reference, DivisionOfCodesWithoutTextureInside) {
+  const Grid g = test::random_map(Dims{70, 45, 33}, 2, 0.3);
+  TextureMap t = reference::texture(g, 8);
+  test::Rng r(5);
+  std::size_t inside = 0;
+  for (std::size_t i = 0; i < t.codes.size(); ++i)
+    if (r.below(10) == 0) {
+      t.codes[i] = kNoTexture;
+      const std::size_t x = i % 70, y = (i / 70) % 45, z = i / (70 * 45);
+      inside += x > 8 && x < 60 && y > 8 && y < 40 && z > 8 && z < 30;
+    }
+  ASSERT_GT(inside, 1000u);
+  for (int threads : {1, 2}) {
+    Params p;
+    p.threads = threads;
+    EXPECT_TRUE(same_blocks(divide(g, t, p), reference::divide(g, t, p))) << threads;
+  }
+}
+
 TEST(Reference, OtherParametersMatch) {
   const Grid g = test::random_map(Dims{53, 41, 37}, 11, 0.7);
   Params variants[4] = {Params::defaults(), Params::paper(), Params::defaults(), Params::paper()};

@@ -33,7 +33,9 @@ struct TextureOperator {
   // Built-in operators only, optional: `native` writing the codes into caller storage of
   // grid.dims.count() codes instead of a fresh array, with grid.dims.count() bytes of `scratch`
   // it may use meanwhile (or nullptr); returns the number of distinct codes. segment() keeps
-  // both in the label array, which it allocates anyway (docs/performance.md).
+  // both in the label array, which it allocates anyway (docs/performance.md). Its kNoTexture
+  // codes must lie only on the map's outer faces (the division counts the blocks inside without
+  // testing for them).
   int (*native_into)(const Grid& grid, const Params& params, std::uint16_t* codes, std::uint8_t* scratch) = nullptr;
 };
 
