@@ -1,6 +1,7 @@
 #include "occseg/components.hpp"
 
 #include <algorithm>
+#include <functional>
 #include <cstring>
 #include <limits>
 #include <mutex>
@@ -155,14 +156,14 @@ inline double run_sum(const float* v, std::size_t n) {
   return ((l[0] + l[1]) + (l[2] + l[3])) + ((l[4] + l[5]) + (l[6] + l[7]));
 }
 
-// label_components() on states `s`; `release`, when given, holds the states and is emptied as
-// soon as the components are known (before the statistics pass).
+// label_components() on states `s`; `release`, when given, frees the states as soon as the
+// components are known (before the statistics pass).
 //
 // The label array is written once, with the final labels: until then only the entry of each
 // run's first voxel is used (a run: a maximal stretch of one state along x within a row, which
 // lies in one component), as its union-find parent, then as its slab-local component number.
 // Filling every voxel's entry in the first two passes moved 200 MB more on a 320 x 320 x 128 map.
-void label_states(const std::uint8_t* s, std::vector<std::uint8_t>* release, const Grid& g,
+void label_states(const std::uint8_t* s, const std::function<void()>& release, const Grid& g,
                   LabelArray& labels, std::vector<Segment>& segments, int threads, bool occupied26) {
   const std::size_t n = g.dims.count();
   detail::check_labels_fit(n);
@@ -278,7 +279,7 @@ void label_states(const std::uint8_t* s, std::vector<std::uint8_t>* release, con
   parent = std::vector<std::uint32_t>();
   // The states are not read again: a caller that handed them over gets their memory back now,
   // before the statistics (1 byte per voxel less at the peak).
-  if (release) *release = std::vector<std::uint8_t>();
+  if (release) release();
   s = nullptr;
 
   // The segment table, filled slab by slab in slab order below.
@@ -394,7 +395,12 @@ void label_components(const std::vector<std::uint8_t>& states, const Grid& grid,
 
 void label_components(std::vector<std::uint8_t>&& states, const Grid& grid, LabelArray& labels,
                       std::vector<Segment>& segments, int threads, bool occupied26) {
-  label_states(states.data(), &states, grid, labels, segments, threads, occupied26);
+  label_states(states.data(), [&] { states = std::vector<std::uint8_t>(); }, grid, labels, segments, threads, occupied26);
+}
+
+void label_components(UninitVector<std::uint8_t>&& states, const Grid& grid, LabelArray& labels,
+                      std::vector<Segment>& segments, int threads, bool occupied26) {
+  label_states(states.data(), [&] { states = UninitVector<std::uint8_t>(); }, grid, labels, segments, threads, occupied26);
 }
 
 }  // namespace occseg

@@ -146,9 +146,11 @@ bool create_by_rows(const Grid& grid, const std::vector<Block>& blocks, const Pa
   return true;
 }
 
-std::vector<std::uint8_t> create(const Grid& grid, const std::vector<Block>& blocks, const Params& params,
-                                 std::uint8_t* own) {
-  std::vector<std::uint8_t> states;
+// V: std::vector (zeroed first) for the public create_segments(), UninitVector for the pipeline,
+// whose states are all written here, in parallel.
+template <class V>
+V create(const Grid& grid, const std::vector<Block>& blocks, const Params& params, std::uint8_t* own) {
+  V states;
   resize_huge(states, grid.dims.count());
   float lo = 0, hi = 0;
   if (own) detail::float_bounds(params.free_below, params.occupied_above, lo, hi);
@@ -161,12 +163,12 @@ std::vector<std::uint8_t> create(const Grid& grid, const std::vector<Block>& blo
 
 std::vector<std::uint8_t> create_segments(const Grid& grid, const std::vector<Block>& blocks,
                                           const Params& params) {
-  return create(grid, blocks, params, nullptr);
+  return create<std::vector<std::uint8_t>>(grid, blocks, params, nullptr);
 }
 
-std::vector<std::uint8_t> detail::create_segments_and_own_states(const Grid& grid, const std::vector<Block>& blocks,
-                                                                 const Params& params, std::uint8_t* own) {
-  return create(grid, blocks, params, own);
+UninitVector<std::uint8_t> detail::create_segments_and_own_states(const Grid& grid, const std::vector<Block>& blocks,
+                                                                  const Params& params, std::uint8_t* own) {
+  return create<UninitVector<std::uint8_t>>(grid, blocks, params, own);
 }
 
 }  // namespace occseg

@@ -242,7 +242,7 @@ namespace {
 // be labelled free everywhere but along its rim. `queue` holds the seeds (gap voxels left unknown
 // that touch an occupied voxel), in any order: the result is a set (connected components), so it
 // does not depend on visiting order.
-void flood_gaps_from_objects(std::vector<std::uint8_t>& st, const std::uint8_t* own,
+void flood_gaps_from_objects(std::uint8_t* st, const std::uint8_t* own,
                              const BitMask& region, const Dims& d, std::vector<std::size_t>& queue) {
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, sz = nx * ny;
   auto gap = [&](std::size_t i) { return own[i] == kUnknown && !bit(region, i / nx, i % nx); };
@@ -267,7 +267,7 @@ void flood_gaps_from_objects(std::vector<std::uint8_t>& st, const std::uint8_t* 
 
 }  // namespace
 
-void detail::apply_voxel_rules(std::vector<std::uint8_t>& st, const std::uint8_t* own, const Dims& d,
+void detail::apply_voxel_rules(std::uint8_t* st, const std::uint8_t* own, const Dims& d,
                                const Params& params, std::uint8_t* scratch, std::size_t scratch_bytes) {
   const BitMask region = region_bits(own, d, params, scratch, scratch_bytes);
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, sz = nx * ny;
@@ -284,7 +284,7 @@ void detail::apply_voxel_rules(std::vector<std::uint8_t>& st, const std::uint8_t
         const std::size_t i = nx * (y + ny * z);
         const std::uint8_t* o = own + i;
         unpack_half(region.row(y + ny * z), o, nx, reg.data());
-        if (!rules_row(st.data() + i, o, reg.data(), y > 0 ? o - nx : none.data(),
+        if (!rules_row(st + i, o, reg.data(), y > 0 ? o - nx : none.data(),
                        y + 1 < ny ? o + nx : none.data(), z > 0 ? o - sz : none.data(),
                        z + 1 < nz ? o + sz : none.data(), nx))
           continue;
@@ -305,7 +305,7 @@ void detail::apply_voxel_rules(std::vector<std::uint8_t>& st, const std::uint8_t
 
 void apply_voxel_rules(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
                        const Params& params) {
-  detail::apply_voxel_rules(st, own.data(), d, params, nullptr, 0);
+  detail::apply_voxel_rules(st.data(), own.data(), d, params, nullptr, 0);
 }
 
 std::vector<std::uint8_t> unknown_regions(const Grid& g, const Params& params) {

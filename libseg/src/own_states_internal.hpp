@@ -8,6 +8,7 @@
 #include "occseg/divide.hpp"
 #include "occseg/grid.hpp"
 #include "occseg/params.hpp"
+#include "occseg/uninit_vector.hpp"
 
 #ifdef __SSE2__
 #include <emmintrin.h>
@@ -44,26 +45,27 @@ inline void own_states_of(const float* p, std::size_t n, float lo, float hi, std
 // any storage: segment() uses the label array) while it reads the map for the block means: the
 // separate own_states() pass read the 52 MB of a 320 x 320 x 128 map once more. When the blocks
 // tile the map (division's leaves do), `own` equals own_states(grid, params); voxels outside
-// every block are not written.
-std::vector<std::uint8_t> create_segments_and_own_states(const Grid& grid, const std::vector<Block>& blocks,
-                                                         const Params& params, std::uint8_t* own);
+// every block are not written. The states are not zeroed first: the blocks must tile the map
+// (division's leaves do), or the voxels outside every block hold garbage.
+UninitVector<std::uint8_t> create_segments_and_own_states(const Grid& grid, const std::vector<Block>& blocks,
+                                                          const Params& params, std::uint8_t* own);
 
 // The refinement steps and the default rules with the own states in any storage (the public
 // versions take a vector; segment() keeps them in the label array). `scratch` (8-byte aligned,
 // or nullptr) may hold the rules' three bit masks of the opening if it has room.
-void refine_unknown(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& dims, const Params& params);
-void refine_boundaries(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& dims,
+void refine_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& dims, const Params& params);
+void refine_boundaries(std::uint8_t* states, const std::uint8_t* own, const Dims& dims,
                        const Params& params);
 // The unknown growth of refine_unknown() on bit masks (unknown_growth.cpp), kept in `scratch`
 // (8-byte aligned) when it has grow_unknown_scratch_bytes(), else in an array of its own.
 std::size_t grow_unknown_scratch_bytes(const Dims& dims);
-void grow_unknown(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& dims, int threads,
+void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& dims, int threads,
                   std::uint8_t* scratch, std::size_t scratch_bytes);
 
 // refine_unknown() then refine_boundaries(), the masks of the first in `scratch` if it has room.
-void refine(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& dims, const Params& params,
+void refine(std::uint8_t* states, const std::uint8_t* own, const Dims& dims, const Params& params,
             std::uint8_t* scratch, std::size_t scratch_bytes);
-void apply_voxel_rules(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& dims,
+void apply_voxel_rules(std::uint8_t* states, const std::uint8_t* own, const Dims& dims,
                        const Params& params, std::uint8_t* scratch, std::size_t scratch_bytes);
 
 }  // namespace occseg::detail

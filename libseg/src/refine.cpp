@@ -220,9 +220,9 @@ struct Sweep {
 // sweep followed by its y sweep reads and writes exactly what the whole x sweep followed by the
 // whole y sweep would. The default call's six sweeps (two passes x y z) read the map four times
 // instead of six (docs/performance.md, "Fifth round").
-void run_sweeps(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& d, int threads, int look,
+void run_sweeps(std::uint8_t* states, const std::uint8_t* own, const Dims& d, int threads, int look,
                 const std::vector<Sweep>& sweeps) {
-  std::uint8_t* const st = states.data();
+  std::uint8_t* const st = states;
   // Per row of voxels (row r: y = r % ny, z = r / ny): may hold an occupied voxel. Set from the
   // states with the first group of sweeps and kept by the windows that write occupied voxels; x
   // rows are written only where they held one already.
@@ -315,22 +315,22 @@ std::vector<std::uint8_t> own_states(const Grid& g, const Params& params) {
   return own;
 }
 
-void detail::refine_unknown(std::vector<std::uint8_t>& st, const std::uint8_t* own, const Dims& d,
+void detail::refine_unknown(std::uint8_t* st, const std::uint8_t* own, const Dims& d,
                             const Params& params) {
   grow_unknown(st, own, d, params.threads, nullptr, 0);  // x+, x-, y+, y-, z+, z-
 }
 
 void refine_unknown(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
                     const Params& params) {
-  detail::refine_unknown(st, own.data(), d, params);
+  detail::refine_unknown(st.data(), own.data(), d, params);
 }
 
-void detail::refine_boundaries(std::vector<std::uint8_t>& st, const std::uint8_t* own, const Dims& d,
+void detail::refine_boundaries(std::uint8_t* st, const std::uint8_t* own, const Dims& d,
                                const Params& params) {
   run_sweeps(st, own, d, params.threads, lookahead_of(params), boundary_sweeps(params));
 }
 
-void detail::refine(std::vector<std::uint8_t>& st, const std::uint8_t* own, const Dims& d, const Params& params,
+void detail::refine(std::uint8_t* st, const std::uint8_t* own, const Dims& d, const Params& params,
                     std::uint8_t* scratch, std::size_t scratch_bytes) {
   grow_unknown(st, own, d, params.threads, scratch, scratch_bytes);
   detail::refine_boundaries(st, own, d, params);
@@ -338,7 +338,7 @@ void detail::refine(std::vector<std::uint8_t>& st, const std::uint8_t* own, cons
 
 void refine_boundaries(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
                        const Params& params) {
-  detail::refine_boundaries(st, own.data(), d, params);
+  detail::refine_boundaries(st.data(), own.data(), d, params);
 }
 
 void refine_unknown(std::vector<std::uint8_t>& st, const Grid& g, const Params& params) {

@@ -139,10 +139,10 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   }
   st.begin("creation");
   std::uint8_t* const own = reinterpret_cast<std::uint8_t*>(r.labels.data());  // the voxels' own states
-  std::vector<std::uint8_t> states = detail::create_segments_and_own_states(grid, blocks, params, own);
+  UninitVector<std::uint8_t> states = detail::create_segments_and_own_states(grid, blocks, params, own);
   if (keep_stages) {
     r.blocks = blocks;
-    r.created_states = states;
+    r.created_states.assign(states.begin(), states.end());
   }
   st.begin("refinement");
   // The rest of the label array (3 bytes per voxel, from an 8-byte boundary) takes the unknown
@@ -151,9 +151,9 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   // at 8.)
   const std::size_t skip = (n + 7) / 8 * 8, bytes = r.labels.size() * sizeof(std::uint32_t);
   const std::size_t room = bytes > skip ? bytes - skip : 0;
-  detail::refine(states, own, grid.dims, params, room ? own + skip : nullptr, room);
+  detail::refine(states.data(), own, grid.dims, params, room ? own + skip : nullptr, room);
   if (params.preset == Preset::default_preset)
-    detail::apply_voxel_rules(states, own, grid.dims, params, room ? own + skip : nullptr, room);
+    detail::apply_voxel_rules(states.data(), own, grid.dims, params, room ? own + skip : nullptr, room);
   release_freed_memory();
   st.begin("labelling");
   // The states go in: they are freed inside, before the segment statistics.

@@ -121,7 +121,7 @@ std::size_t grow_unknown_scratch_bytes(const Dims& d) {
   return 2 * d.ny * d.nz * ((d.nx + 63) / 64) * sizeof(std::uint64_t);
 }
 
-void grow_unknown(std::vector<std::uint8_t>& states, const std::uint8_t* own, const Dims& d, int threads,
+void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& d, int threads,
                   std::uint8_t* scratch, std::size_t scratch_bytes) {
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, rows = ny * nz, words = (nx + 63) / 64;
   std::vector<std::uint64_t> own_words;
@@ -135,7 +135,7 @@ void grow_unknown(std::vector<std::uint8_t>& states, const std::uint8_t* own, co
   word_t* const W = masks;                  // row r at W + r * words
   word_t* const C = masks + rows * words;
   std::vector<std::uint8_t> grew(rows, 0);  // rows whose W changed: the only ones written back
-  std::uint8_t* const st = states.data();
+  std::uint8_t* const st = states;
   auto row_w = [&](std::size_t r) { return W + r * words; };
   auto row_c = [&](std::size_t r) { return C + r * words; };
 

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cmath>
 
 #include "occseg/create.hpp"
@@ -44,8 +46,9 @@ TEST(Create, OwnStatesFoundDuringCreationMatchTheirDefinition) {
     p.threads = 1 + static_cast<int>(k % 3);
     const std::vector<Block> blocks = divide(g, compute_texture(g, p.contrast_bins, p.threads), p);
     std::vector<std::uint8_t> own(g.p.size(), 7);  // 7: never written
-    const std::vector<std::uint8_t> st = detail::create_segments_and_own_states(g, blocks, p, own.data());
-    EXPECT_EQ(st, create_segments(g, blocks, p)) << "map " << k;
+    const UninitVector<std::uint8_t> st = detail::create_segments_and_own_states(g, blocks, p, own.data());
+    const std::vector<std::uint8_t> plain = create_segments(g, blocks, p);
+    EXPECT_TRUE(std::equal(st.begin(), st.end(), plain.begin(), plain.end())) << "map " << k;
     ASSERT_EQ(own.size(), g.p.size());
     std::size_t wrong = 0;
     for (std::size_t i = 0; i < own.size(); ++i) wrong += own[i] != static_cast<std::uint8_t>(p.state_of(g.p[i]));

@@ -199,7 +199,7 @@ TEST(Reference, UnknownGrowthMatchesOnRandomStates) {
         std::vector<std::uint64_t> scratch(detail::grow_unknown_scratch_bytes(d) / 8 + 1, 0xA5A5A5A5A5A5A5A5ull);
         got = st;
         const std::vector<std::uint8_t> own = own_states(g, p);
-        detail::grow_unknown(got, own.data(), d, threads, reinterpret_cast<std::uint8_t*>(scratch.data()),
+        detail::grow_unknown(got.data(), own.data(), d, threads, reinterpret_cast<std::uint8_t*>(scratch.data()),
                              scratch.size() * 8);
         EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " in scratch";
       }

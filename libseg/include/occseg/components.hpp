@@ -39,5 +39,7 @@ void label_components(const std::vector<std::uint8_t>& states, const Grid& grid,
 // known, before the statistics pass (which finds its runs in 1/8 byte per voxel of bits).
 void label_components(std::vector<std::uint8_t>&& states, const Grid& grid, LabelArray& labels,
                       std::vector<Segment>& segments, int threads = 0, bool occupied26 = false);
+void label_components(UninitVector<std::uint8_t>&& states, const Grid& grid, LabelArray& labels,
+                      std::vector<Segment>& segments, int threads = 0, bool occupied26 = false);
 
 }  // namespace occseg
