@@ -49,6 +49,9 @@ inline void own_states_of(const float* p, std::size_t n, float lo, float hi, std
 // (division's leaves do), or the voxels outside every block hold garbage.
 UninitVector<std::uint8_t> create_segments_and_own_states(const Grid& grid, const std::vector<Block>& blocks,
                                                           const Params& params, std::uint8_t* own);
+// For tests: the block means as creation sums them when the blocks tile the map on the lattice of
+// kMeanCell^3 cells (row by row, into the cells' sums); empty for other blocks.
+std::vector<double> block_means_by_rows(const Grid& grid, const std::vector<Block>& blocks, int threads);
 
 // The refinement steps and the default rules with the own states in any storage (the public
 // versions take a vector; segment() keeps them in the label array). `scratch` (8-byte aligned,

@@ -109,6 +109,59 @@ TEST(Create, BlockMeansAddCellByCellOnBothPaths) {
   }
 }
 
+// Creation's row-by-row sums (the AVX2 path adds eight cells of a row at once) against
+// mean_occupancy(), bit for bit. Each 8^3 cell starts with 1.0 and holds half-ulps of 1.0 (2^-53,
+// slightly more, a quarter, zero) elsewhere: each addition then rounds to even or not depending
+// on what came before, so the same values in another order, even two neighbours swapped, give
+// another sum in most cells (checked below), and a voxel added out of turn, to the wrong cell or
+// twice shows. Rows of 9, 16 and 17 cells: whole groups of eight and scalar leftovers.
+TEST(Create, RowSumsAreMeanOccupancyBitForBit) {
+  const Dims dims[] = {{72, 16, 12}, {130, 17, 20}, {128, 8, 8}};
+  for (std::size_t k = 0; k < 3; ++k) {
+    Grid g(dims[k], 0.0f);
+    test::Rng r(70 + k);
+    const float half = std::ldexp(1.0f, -53);
+    const float values[4] = {half, half * (1.0f + std::ldexp(1.0f, -7)), half / 2, 0.0f};
+    for (float& v : g.p) v = values[r.below(4)];
+    for (std::uint32_t z = 0; z < g.dims.nz; z += 8)
+      for (std::uint32_t y = 0; y < g.dims.ny; y += 8)
+        for (std::uint32_t x = 0; x < g.dims.nx; x += 8) g.at(x, y, z) = 1.0f;
+    // 16^3 blocks where they fit whole, 8^3 cells (clipped by the far faces) elsewhere.
+    const auto fits16 = [&](std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+      return x + 16 <= g.dims.nx && y + 16 <= g.dims.ny && z + 16 <= g.dims.nz;
+    };
+    std::vector<Block> blocks;
+    for (std::uint32_t z = 0; z < g.dims.nz; z += 8)
+      for (std::uint32_t y = 0; y < g.dims.ny; y += 8)
+        for (std::uint32_t x = 0; x < g.dims.nx; x += 8) {
+          const std::uint32_t ax = x / 16 * 16, ay = y / 16 * 16, az = z / 16 * 16;
+          if (fits16(ax, ay, az)) {
+            if (x == ax && y == ay && z == az) blocks.push_back({{x, y, z}, {x + 16, y + 16, z + 16}});
+            continue;
+          }
+          blocks.push_back({{x, y, z},
+                            {std::min<std::uint32_t>(x + 8, g.dims.nx), std::min<std::uint32_t>(y + 8, g.dims.ny),
+                             std::min<std::uint32_t>(z + 8, g.dims.nz)}});
+        }
+    std::size_t reordered_differs = 0;
+    for (const Block& b : blocks) {
+      Grid swapped = g;  // voxels 4 and 5 of every row swapped
+      for (std::uint32_t z = b.lo[2]; z < b.hi[2]; ++z)
+        for (std::uint32_t y = b.lo[1]; y < b.hi[1]; ++y)
+          for (std::uint32_t x = b.lo[0]; x + 8 <= b.hi[0]; x += 8) std::swap(swapped.at(x + 4, y, z), swapped.at(x + 5, y, z));
+      reordered_differs += mean_occupancy(swapped, b) != mean_occupancy(g, b);
+    }
+    ASSERT_GT(reordered_differs, blocks.size() / 3) << "map " << k << ": the values do not tell orders apart";
+    for (int threads : {1, 2, 3}) {
+      const std::vector<double> means = detail::block_means_by_rows(g, blocks, threads);
+      ASSERT_EQ(means.size(), blocks.size()) << "map " << k << ": the blocks do not tile it";
+      std::size_t wrong = 0;
+      for (std::size_t i = 0; i < blocks.size(); ++i) wrong += means[i] != mean_occupancy(g, blocks[i]);
+      EXPECT_EQ(wrong, 0u) << "map " << k << ", " << threads << " threads";
+    }
+  }
+}
+
 // Division's leaves on maps whose sides are not multiples of Smin (cells clipped by the far
 // faces), Smin 4 and 8: every voxel gets the state of its block's mean, and voxels outside every
 // block stay free when the blocks do not tile the map.
