@@ -3,11 +3,14 @@
 // 1 = noisy worst case), threads.
 #include <benchmark/benchmark.h>
 
+#include <atomic>
 #include <map>
 #include <memory>
 
+#include "occseg/context.hpp"
 #include "occseg/create.hpp"
 #include "occseg/departures.hpp"
+#include "occseg/parallel.hpp"
 #include "occseg/refine.hpp"
 #include "occseg/planes.hpp"
 #include "occseg/segment.hpp"
@@ -178,6 +181,22 @@ void stage_args(benchmark::internal::Benchmark* b) {
 
 }  // namespace
 
+// The cost of one parallel loop of two chunks that do nothing: started on a context's pool (its
+// workers spin briefly between loops) or with threads started for the loop (calls without a
+// context). A segmentation makes about 20 such loops.
+void BM_ParallelForDispatch(benchmark::State& state) {
+  std::unique_ptr<Context> ctx;
+  if (state.range(0)) ctx = std::make_unique<Context>(2);
+  std::atomic<std::size_t> sink{0};
+  auto loop = [&] { parallel_for(2, 2, [&](std::size_t b, std::size_t e) { sink += e - b; }); };
+  for (auto _ : state) {
+    if (ctx) ctx->run(loop);
+    else loop();
+  }
+  benchmark::DoNotOptimize(sink.load());
+}
+
+BENCHMARK(BM_ParallelForDispatch)->ArgNames({"context"})->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond)->UseRealTime();
 BENCHMARK(BM_Texture)->Apply(stage_args);
 BENCHMARK(BM_Division)->Apply(stage_args);
 BENCHMARK(BM_Creation)->Apply(stage_args);
