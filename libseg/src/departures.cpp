@@ -1,17 +1,22 @@
 #include "occseg/departures.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <mutex>
 
 #include "occseg/parallel.hpp"
 #include "bit_rows_internal.hpp"
+#include "cpu_features.hpp"
 #include "huge_pages.hpp"
 #include "own_states_internal.hpp"
 #include "occseg/refine.hpp"
 
 #ifdef __SSE2__
 #include <emmintrin.h>
+#endif
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
 #endif
 
 namespace occseg {
@@ -170,7 +175,82 @@ bool rules_row(std::uint8_t* __restrict st, const std::uint8_t* __restrict own, 
   return any | seed(0, t0) | seed(n - 1, tn);
 }
 
+#if defined(__x86_64__) && defined(__GNUC__)
+#define OCCSEG_RULES_AVX2 1
+// Bits x .. x + 31 of a bit row as 32 bytes, 0xFF where set. The bits may straddle two words;
+// the second is read only then (it lies in the row while x + 31 is in it).
+__attribute__((target("avx2"))) inline __m256i bytes_of_bits32(const word_t* bits, std::size_t x) {
+  std::uint64_t w = bits[x / 64] >> (x % 64);
+  if (x % 64 > 32) w |= bits[x / 64 + 1] << (64 - x % 64);
+  const __m256i b = _mm256_set1_epi32(static_cast<int>(static_cast<std::uint32_t>(w)));
+  // byte i of the result takes byte i / 8 of the 32 bits (a shuffle stays within 128-bit halves,
+  // each of which holds all four)
+  const __m256i pick = _mm256_setr_epi8(0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1, 1, 2, 2, 2, 2, 2, 2, 2, 2, 3, 3,
+                                        3, 3, 3, 3, 3, 3);
+  const __m256i sel = _mm256_set1_epi64x(static_cast<long long>(0x8040201008040201ull));
+  return _mm256_cmpeq_epi8(_mm256_and_si256(_mm256_shuffle_epi8(b, pick), sel), sel);
+}
+
+// rules_row() for rows of at least 34 voxels, 32 voxels per step in hand-written AVX2, with the
+// region read from its bit row (no byte row unpacked first) and the seed flag gathered in the
+// same loop; the last step overlaps the one before instead of a scalar tail (the rules are
+// idempotent: a second application to a result gives the result). GCC's vectorised rules_row
+// spent two thirds of its instructions on a row of 320 in its scalar tails and second pass.
+__attribute__((target("avx2"))) inline __m256i at32(const std::uint8_t* p, std::size_t x) {
+  return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + x));
+}
+
+// The rules on voxels x .. x + 31 of a row; returns the candidates for seeds (0xFF).
+__attribute__((target("avx2"))) inline __m256i rules_step_avx2(std::uint8_t* st, const std::uint8_t* own,
+                                                               const word_t* region, const std::uint8_t* ym,
+                                                               const std::uint8_t* yp, const std::uint8_t* zm,
+                                                               const std::uint8_t* zp, std::size_t x) {
+  const __m256i occ = _mm256_set1_epi8(static_cast<char>(kOccupied)), unk = _mm256_set1_epi8(static_cast<char>(kUnknown));
+  const __m256i fre = _mm256_set1_epi8(static_cast<char>(kFree));
+  const auto at = at32;
+  {
+    const __m256i o = at(own, x), s = at(st, x);
+    const __m256i touches =
+        _mm256_or_si256(_mm256_or_si256(_mm256_cmpeq_epi8(at(own, x - 1), occ), _mm256_cmpeq_epi8(at(own, x + 1), occ)),
+                        _mm256_or_si256(_mm256_or_si256(_mm256_cmpeq_epi8(at(ym, x), occ), _mm256_cmpeq_epi8(at(yp, x), occ)),
+                                        _mm256_or_si256(_mm256_cmpeq_epi8(at(zm, x), occ), _mm256_cmpeq_epi8(at(zp, x), occ))));
+    const __m256i reg = bytes_of_bits32(region, x);
+    const __m256i gap = _mm256_blendv_epi8(s, unk, _mm256_and_si256(_mm256_cmpeq_epi8(s, fre), touches));
+    const __m256i own_unknown = _mm256_cmpeq_epi8(o, unk);
+    const __m256i res = _mm256_blendv_epi8(o, _mm256_blendv_epi8(gap, unk, reg), own_unknown);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(st + x), res);
+    return _mm256_andnot_si256(reg, _mm256_and_si256(own_unknown, _mm256_cmpeq_epi8(res, unk)));
+  }
+}
+
+__attribute__((target("avx2"))) bool rules_row_avx2(std::uint8_t* st, const std::uint8_t* own, const word_t* region,
+                                                    const std::uint8_t* ym, const std::uint8_t* yp,
+                                                    const std::uint8_t* zm, const std::uint8_t* zp, std::size_t n) {
+  __m256i any = _mm256_setzero_si256();
+  std::size_t x = 1;
+  for (; x + 32 <= n - 1; x += 32) any = _mm256_or_si256(any, rules_step_avx2(st, own, region, ym, yp, zm, zp, x));
+  if (x < n - 1) any = _mm256_or_si256(any, rules_step_avx2(st, own, region, ym, yp, zm, zp, n - 1 - 32));
+  const auto reg_at = [&](std::size_t i) { return static_cast<std::uint8_t>((region[i / 64] >> (i % 64)) & 1); };
+  auto across = [&](std::size_t i) {
+    return (ym[i] == kOccupied) | (yp[i] == kOccupied) | (zm[i] == kOccupied) | (zp[i] == kOccupied);
+  };
+  const bool t0 = (own[1] == kOccupied) | across(0), tn = (own[n - 2] == kOccupied) | across(n - 1);
+  st[0] = rule(st[0], own[0], reg_at(0), t0);
+  st[n - 1] = rule(st[n - 1], own[n - 1], reg_at(n - 1), tn);
+  auto seed = [&](std::size_t i, bool t) {
+    return (own[i] == kUnknown) & (reg_at(i) == 0) & t & (st[i] == kUnknown);
+  };
+  return !_mm256_testz_si256(any, any) || seed(0, t0) || seed(n - 1, tn);
+}
+#endif
+
+std::atomic<bool> g_vector_rules{true};
+
 }  // namespace
+
+namespace detail {
+void set_vector_rules(bool enabled) { g_vector_rules.store(enabled, std::memory_order_relaxed); }
+}  // namespace detail
 
 namespace {
 
@@ -276,6 +356,9 @@ void detail::apply_voxel_rules(std::uint8_t* st, const std::uint8_t* own, const 
   // hold seeds of the gap flood are searched for them on the way, slab by slab.
   std::vector<std::size_t> seeds;
   std::mutex seeds_mutex;
+#ifdef OCCSEG_RULES_AVX2
+  const bool avx2 = nx >= 34 && cpu_has_avx2() && g_vector_rules.load(std::memory_order_relaxed);
+#endif
   parallel_for_dynamic(nz, params.threads, [&](std::size_t z0, std::size_t z1) {
     std::vector<std::size_t> mine;
     std::vector<std::uint8_t> reg(nx);  // this row's region bits as bytes
@@ -283,14 +366,24 @@ void detail::apply_voxel_rules(std::uint8_t* st, const std::uint8_t* own, const 
       for (std::size_t y = 0; y < ny; ++y) {
         const std::size_t i = nx * (y + ny * z);
         const std::uint8_t* o = own + i;
-        unpack_half(region.row(y + ny * z), o, nx, reg.data());
-        if (!rules_row(st + i, o, reg.data(), y > 0 ? o - nx : none.data(),
-                       y + 1 < ny ? o + nx : none.data(), z > 0 ? o - sz : none.data(),
-                       z + 1 < nz ? o + sz : none.data(), nx))
-          continue;
+        const word_t* const bits = region.row(y + ny * z);
+        const std::uint8_t *ym = y > 0 ? o - nx : none.data(), *yp = y + 1 < ny ? o + nx : none.data();
+        const std::uint8_t *zm = z > 0 ? o - sz : none.data(), *zp = z + 1 < nz ? o + sz : none.data();
+        bool seeds_here;
+#ifdef OCCSEG_RULES_AVX2
+        if (avx2) {
+          seeds_here = rules_row_avx2(st + i, o, bits, ym, yp, zm, zp, nx);
+        } else
+#endif
+        {
+          unpack_half(bits, o, nx, reg.data());
+          seeds_here = rules_row(st + i, o, reg.data(), ym, yp, zm, zp, nx);
+        }
+        if (!seeds_here) continue;
         for (std::size_t x = 0; x < nx; ++x) {
           const std::size_t j = i + x;
-          if (st[j] != kUnknown || own[j] != kUnknown || reg[x]) continue;
+          // (the region bit alone: it matters only where the own state is unknown)
+          if (st[j] != kUnknown || own[j] != kUnknown || ((bits[x / 64] >> (x % 64)) & 1)) continue;
           const bool touches = (x > 0 && own[j - 1] == kOccupied) || (x + 1 < nx && own[j + 1] == kOccupied) ||
                                (y > 0 && own[j - nx] == kOccupied) || (y + 1 < ny && own[j + nx] == kOccupied) ||
                                (z > 0 && own[j - sz] == kOccupied) || (z + 1 < nz && own[j + sz] == kOccupied);
