@@ -14,12 +14,13 @@ inline bool cpu_has_avx2() {
 #endif
 }
 
-// True when the processor (and the system, which must save the registers) has AVX-512F and BW
-// (every AVX-512 processor since 2017). Under valgrind, which has no AVX-512, this is false: the
-// AVX2 kernels run there.
+// True when the processor (and the system, which must save the registers) has AVX-512 F, BW and
+// VL (every AVX-512 processor since 2017). Under valgrind, which has no AVX-512, this is false:
+// the AVX2 kernels run there.
 inline bool cpu_has_avx512() {
 #if defined(__x86_64__) && defined(__GNUC__)
-  static const bool yes = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw");
+  static const bool yes = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
+                          __builtin_cpu_supports("avx512vl");
   return yes;
 #else
   return false;

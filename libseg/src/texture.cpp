@@ -245,53 +245,67 @@ __attribute__((target("avx2"))) bool contrast_row_avx2(const float* p, const std
 // undefined.)
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-__attribute__((target("avx512f"))) bool contrast_row_avx512(const float* p, const std::ptrdiff_t* off, std::size_t n,
-                                                            detail::code_t* out, std::uint8_t* lbp) {
+// The voxels x .. x + 15 of the row at p where `m` has their bits (the others are not read or
+// written); `bad` gathers the voxels outside [0, 1], `rc` the kRecheck ones.
+__attribute__((target("avx512f"))) inline void contrast16(const float* p, const std::ptrdiff_t* o, std::size_t x,
+                                                          __mmask16 m, detail::code_t* out, std::uint8_t* lbp,
+                                                          __mmask16& bad, __mmask16& rc) {
   const __m512 zero = _mm512_setzero_ps(), err = _mm512_set1_ps(1e-6f), one = _mm512_set1_ps(1.0f);
   const __m512 fine = _mm512_set1_ps(static_cast<float>(ContrastQuantizer::kFine));
   const __m512i top = _mm512_set1_epi32(ContrastQuantizer::kFine - 1), recheck = _mm512_set1_epi32(kRecheck);
   const __m512i zeroi = _mm512_setzero_si512(), inc = _mm512_set1_epi32(1), six = _mm512_set1_epi32(6);
   const __m512 recip = _mm512_setr_ps(1.0f, 1.0f, 1.0f / 2, 1.0f / 3, 1.0f / 4, 1.0f / 5, 1.0f / 6, 1.0f, 1.0f, 1.0f,
                                       1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f);
-  const std::ptrdiff_t o[6] = {off[0], off[1], off[2], off[3], off[4], off[5]};  // see contrast_row_avx2
-  __mmask16 bad = 0;
-  std::size_t x = 0;
-  for (; x + 16 <= n; x += 16) {
-    const __m512 c = _mm512_loadu_ps(p + x);
-    bad = static_cast<__mmask16>(bad | _mm512_cmp_ps_mask(c, zero, _CMP_NGE_UQ) | _mm512_cmp_ps_mask(c, one, _CMP_NLE_UQ));
-    __m512 s1[3], s0[3];
-    __m512i up_count = zeroi, bits = zeroi;
-    for (int k = 0; k < 3; ++k) {
-      const __m512 v = _mm512_loadu_ps(p + x + o[2 * k]), w = _mm512_loadu_ps(p + x + o[2 * k + 1]);
-      const __mmask16 vu = _mm512_cmp_ps_mask(v, c, _CMP_GE_OQ), wu = _mm512_cmp_ps_mask(w, c, _CMP_GE_OQ);
-      if (lbp) {
-        bits = _mm512_mask_or_epi32(bits, vu, bits, _mm512_set1_epi32(1 << (2 * k)));
-        bits = _mm512_mask_or_epi32(bits, wu, bits, _mm512_set1_epi32(2 << (2 * k)));
-      }
-      s1[k] = _mm512_add_ps(_mm512_maskz_mov_ps(vu, v), _mm512_maskz_mov_ps(wu, w));
-      s0[k] = _mm512_add_ps(_mm512_maskz_mov_ps(static_cast<__mmask16>(~vu), v),
-                            _mm512_maskz_mov_ps(static_cast<__mmask16>(~wu), w));
-      up_count = _mm512_mask_add_epi32(up_count, vu, up_count, inc);
-      up_count = _mm512_mask_add_epi32(up_count, wu, up_count, inc);
+  const __m512 c = _mm512_maskz_loadu_ps(m, p + x);
+  bad = static_cast<__mmask16>(bad | (m & (_mm512_cmp_ps_mask(c, zero, _CMP_NGE_UQ) | _mm512_cmp_ps_mask(c, one, _CMP_NLE_UQ))));
+  __m512 s1[3], s0[3];
+  __m512i up_count = zeroi, bits = zeroi;
+  for (int k = 0; k < 3; ++k) {
+    const __m512 v = _mm512_maskz_loadu_ps(m, p + x + o[2 * k]), w = _mm512_maskz_loadu_ps(m, p + x + o[2 * k + 1]);
+    const __mmask16 vu = _mm512_cmp_ps_mask(v, c, _CMP_GE_OQ), wu = _mm512_cmp_ps_mask(w, c, _CMP_GE_OQ);
+    if (lbp) {
+      bits = _mm512_mask_or_epi32(bits, vu, bits, _mm512_set1_epi32(1 << (2 * k)));
+      bits = _mm512_mask_or_epi32(bits, wu, bits, _mm512_set1_epi32(2 << (2 * k)));
     }
-    const __m512 sum1 = _mm512_add_ps(_mm512_add_ps(s1[0], s1[1]), s1[2]);
-    const __m512 sum0 = _mm512_add_ps(_mm512_add_ps(s0[0], s0[1]), s0[2]);
-    const __m512 con = _mm512_sub_ps(_mm512_mul_ps(sum1, _mm512_permutexvar_ps(up_count, recip)),
-                                     _mm512_mul_ps(sum0, _mm512_permutexvar_ps(_mm512_sub_epi32(six, up_count), recip)));
-    const __mmask16 two_sided = static_cast<__mmask16>(_mm512_cmpgt_epi32_mask(up_count, zeroi) &
-                                                       _mm512_cmpgt_epi32_mask(six, up_count));
-    const __m512 lo = _mm512_mul_ps(_mm512_sub_ps(con, err), fine), hi = _mm512_mul_ps(_mm512_add_ps(con, err), fine);
-    const __m512i step = _mm512_min_epi32(_mm512_cvttps_epi32(lo), top);
-    const __m512i step_hi = _mm512_min_epi32(_mm512_cvttps_epi32(hi), top);
-    const __mmask16 sure = static_cast<__mmask16>(_mm512_cmp_ps_mask(lo, zero, _CMP_GT_OQ) &
-                                                  _mm512_cmpeq_epi32_mask(step, step_hi));
-    const __m512i v = _mm512_mask_blend_epi32(sure, recheck, _mm512_add_epi32(step, inc));
-    // Values <= 0xFFFF (and LBP codes <= 63): truncating to 16 (8) bits keeps them.
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + x), _mm512_cvtepi32_epi16(_mm512_maskz_mov_epi32(two_sided, v)));
-    if (lbp) _mm_storeu_si128(reinterpret_cast<__m128i*>(lbp + x), _mm512_cvtepi32_epi8(bits));
+    s1[k] = _mm512_add_ps(_mm512_maskz_mov_ps(vu, v), _mm512_maskz_mov_ps(wu, w));
+    s0[k] = _mm512_add_ps(_mm512_maskz_mov_ps(static_cast<__mmask16>(~vu), v),
+                          _mm512_maskz_mov_ps(static_cast<__mmask16>(~wu), w));
+    up_count = _mm512_mask_add_epi32(up_count, vu, up_count, inc);
+    up_count = _mm512_mask_add_epi32(up_count, wu, up_count, inc);
   }
-  const bool rest = contrast_row_avx2(p + x, off, n - x, out + x, lbp ? lbp + x : nullptr);
-  return bad == 0 && rest;
+  const __m512 sum1 = _mm512_add_ps(_mm512_add_ps(s1[0], s1[1]), s1[2]);
+  const __m512 sum0 = _mm512_add_ps(_mm512_add_ps(s0[0], s0[1]), s0[2]);
+  const __m512 con = _mm512_sub_ps(_mm512_mul_ps(sum1, _mm512_permutexvar_ps(up_count, recip)),
+                                   _mm512_mul_ps(sum0, _mm512_permutexvar_ps(_mm512_sub_epi32(six, up_count), recip)));
+  const __mmask16 two_sided = static_cast<__mmask16>(_mm512_cmpgt_epi32_mask(up_count, zeroi) &
+                                                     _mm512_cmpgt_epi32_mask(six, up_count));
+  const __m512 lo = _mm512_mul_ps(_mm512_sub_ps(con, err), fine), hi = _mm512_mul_ps(_mm512_add_ps(con, err), fine);
+  const __m512i step = _mm512_min_epi32(_mm512_cvttps_epi32(lo), top);
+  const __m512i step_hi = _mm512_min_epi32(_mm512_cvttps_epi32(hi), top);
+  const __mmask16 sure = static_cast<__mmask16>(_mm512_cmp_ps_mask(lo, zero, _CMP_GT_OQ) &
+                                                _mm512_cmpeq_epi32_mask(step, step_hi));
+  rc = static_cast<__mmask16>(rc | (m & two_sided & ~sure));
+  const __m512i v = _mm512_mask_blend_epi32(sure, recheck, _mm512_add_epi32(step, inc));
+  // Values <= 0xFFFF (and LBP codes <= 63): truncating to 16 (8) bits keeps them.
+  _mm512_mask_cvtepi32_storeu_epi16(out + x, m, _mm512_maskz_mov_epi32(two_sided, v));
+  if (lbp) _mm512_mask_cvtepi32_storeu_epi8(lbp + x, m, bits);
+}
+
+// contrast_row_avx2 for 16 voxels per step in AVX-512 (F only): the same operations in the same
+// order on each lane, so the same steps, LBP codes and check; comparisons go to mask registers,
+// which removes the and/andnot selections and the register spills of the AVX2 loop (about 105
+// instructions per 8 voxels there). The last n % 16 voxels are one masked step (a scalar tail
+// cost a row of 318 as much as 40 of its voxels). `any_recheck` is set when some voxel is
+// kRecheck.
+__attribute__((target("avx512f"))) bool contrast_row_avx512(const float* p, const std::ptrdiff_t* off, std::size_t n,
+                                                            detail::code_t* out, std::uint8_t* lbp, bool& any_recheck) {
+  const std::ptrdiff_t o[6] = {off[0], off[1], off[2], off[3], off[4], off[5]};  // see contrast_row_avx2
+  __mmask16 bad = 0, rc = 0;
+  std::size_t x = 0;
+  for (; x + 16 <= n; x += 16) contrast16(p, o, x, 0xFFFF, out, lbp, bad, rc);
+  if (x < n) contrast16(p, o, x, static_cast<__mmask16>((1u << (n - x)) - 1), out, lbp, bad, rc);
+  any_recheck = rc != 0;
+  return bad == 0;
 }
 #pragma GCC diagnostic pop
 
@@ -435,10 +449,10 @@ __attribute__((target("avx2"))) void count_steps_avx2(const detail::code_t* v, s
 #endif
 
 // count_steps_avx2() with the non-zero steps of 32 voxels at a time packed by one compress
-// instruction (AVX-512 VBMI2) instead of a table of shuffles per 8.
+// instruction (AVX-512 VBMI2) instead of a table of shuffles per 8; `list` needs room for n + 32.
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // see contrast_row_avx512
-__attribute__((target("avx512f,avx512bw,avx512vbmi2"))) void count_steps_avx512(const detail::code_t* v, std::size_t n,
+__attribute__((target("avx512f,avx512bw,avx512vl,avx512vbmi2"))) void count_steps_avx512(const detail::code_t* v, std::size_t n,
                                                                                std::uint64_t* h, std::uint16_t* list) {
   std::size_t x = 0, len = 0;
   for (; x + 32 <= n; x += 32) {
@@ -447,7 +461,12 @@ __attribute__((target("avx512f,avx512bw,avx512vbmi2"))) void count_steps_avx512(
     _mm512_storeu_si512(list + len, _mm512_maskz_compress_epi16(m, s));
     len += static_cast<std::size_t>(__builtin_popcount(m));
   }
-  for (; x < n; ++x) list[len] = v[x], len += v[x] != 0;
+  if (x < n) {  // the last n - x, masked
+    const __m512i s = _mm512_maskz_loadu_epi16(static_cast<__mmask32>((1ull << (n - x)) - 1), v + x);
+    const __mmask32 m = _mm512_test_epi16_mask(s, s);
+    _mm512_storeu_si512(list + len, _mm512_maskz_compress_epi16(m, s));
+    len += static_cast<std::size_t>(__builtin_popcount(m));
+  }
   std::size_t i = 0;
   for (; i + 4 <= len; i += 4) {
     ++h[list[i]];
@@ -458,22 +477,23 @@ __attribute__((target("avx512f,avx512bw,avx512vbmi2"))) void count_steps_avx512(
   for (; i < len; ++i) ++h[list[i]];
 }
 
-// codes_from_lbp_avx2() for 32 voxels per step (AVX-512 BW): the same operations on each lane.
-__attribute__((target("avx512f,avx512bw"))) std::size_t codes_from_lbp_avx512(detail::code_t* row, const std::uint8_t* lbp,
+// codes_from_lbp_avx2() for 32 voxels per step (AVX-512 BW): the same operations on each lane,
+// the last n % 32 voxels in one masked step. Returns n.
+__attribute__((target("avx512f,avx512bw,avx512vl"))) std::size_t codes_from_lbp_avx512(detail::code_t* row, const std::uint8_t* lbp,
                                                                              std::size_t n, const std::uint16_t* rises,
                                                                              std::size_t nr, std::uint16_t bins) {
   __m512i rise[16];
   for (std::size_t k = 0; k < nr; ++k) rise[k] = _mm512_set1_epi16(static_cast<short>(rises[k]));
   const __m512i one = _mm512_set1_epi16(1), b = _mm512_set1_epi16(static_cast<short>(bins));
-  std::size_t x = 0;
-  for (; x + 32 <= n; x += 32) {
-    const __m512i v = _mm512_loadu_si512(row + x);
+  for (std::size_t x = 0; x < n; x += 32) {
+    const auto m = static_cast<__mmask32>(n - x >= 32 ? ~0u : (1u << (n - x)) - 1);
+    const __m512i v = _mm512_maskz_loadu_epi16(m, row + x);
     __m512i lvl = _mm512_maskz_mov_epi16(_mm512_test_epi16_mask(v, v), one);
     for (std::size_t k = 0; k < nr; ++k) lvl = _mm512_mask_add_epi16(lvl, _mm512_cmpgt_epi16_mask(v, rise[k]), lvl, one);
-    const __m512i l = _mm512_cvtepu8_epi16(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(lbp + x)));
-    _mm512_storeu_si512(row + x, _mm512_add_epi16(_mm512_mullo_epi16(l, b), lvl));
+    const __m512i l = _mm512_cvtepu8_epi16(_mm256_maskz_loadu_epi8(m, lbp + x));
+    _mm512_mask_storeu_epi16(row + x, m, _mm512_add_epi16(_mm512_mullo_epi16(l, b), lvl));
   }
-  return x;
+  return n;
 }
 #pragma GCC diagnostic pop
 
@@ -596,7 +616,7 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
   parallel_for(static_cast<std::size_t>(t), t, [&](std::size_t b, std::size_t e) {
     for (std::size_t k = b; k < e; ++k) {
       std::uint64_t* h = part[k].data();
-      std::vector<std::uint16_t> list(nx + 8);
+      std::vector<std::uint16_t> list(nx + 32);  // count_steps_avx*'s room
       const std::size_t z0 = nz * k / t, z1 = nz * (k + 1) / t;
       bool ok = (z0 == 0 || plane_ok(z0 - 1)) && plane_ok(z0);
       for (std::size_t z = z0; ok && z < z1; ++z) {
@@ -620,8 +640,9 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
           // then reads 3 bytes per voxel instead of the map's rows again.
           std::uint8_t* lrow = lbp_scratch ? lbp_scratch + nx * (y + ny * z) + x0 : nullptr;
 #ifdef OCCSEG_TEXTURE_AVX2
+          bool rechecks = true;  // unless the kernel says there are none
           if (sten.present == 63 && use_avx512_kernel()) {
-            ok = contrast_row_avx512(prow0, sten.off, x1 - x0, row + x0, lrow) && ok;
+            ok = contrast_row_avx512(prow0, sten.off, x1 - x0, row + x0, lrow, rechecks) && ok;
           } else if (sten.present == 63 && use_avx2_kernel()) {
             ok = contrast_row_avx2(prow0, sten.off, x1 - x0, row + x0, lrow) && ok;
           } else
@@ -630,7 +651,7 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
             contrast_any<0>(prow0, sten.off, x1 - x0, row + x0, sten.present);
             if (lrow) lbp_any<0>(prow0, sten.off, x1 - x0, lrow, sten.present);
           }
-          if (any_recheck(row + x0, x1 - x0)) {
+          if (rechecks && any_recheck(row + x0, x1 - x0)) {
             for (std::size_t x = x0; x < x1; ++x)
               if (row[x] == kRecheck) row[x] = exact_step(prow + x, sten.off, sten.present);
           }
