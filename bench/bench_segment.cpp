@@ -16,6 +16,7 @@
 #include "occseg/context.hpp"
 #include "occseg/npy.hpp"
 #include "occseg/segment.hpp"
+#include "occseg/texture.hpp"
 #include "scenes.hpp"
 
 using namespace occseg;
@@ -65,6 +66,14 @@ int main(int argc, char** argv) {
                         std::string(argv[1]) == "time";
     if (timing) {
       const Grid g = grid_from_npy(read_npy(argv[2]), 1.0, argv[2]);
+      // OCCSEG_BENCH_TEXTURE_KERNEL=compiler|avx2 caps the texture kernels (the fastest the
+      // processor has by default), to compare them side by side.
+      if (const char* k = std::getenv("OCCSEG_BENCH_TEXTURE_KERNEL")) {
+        const std::string kernel = k;
+        detail::set_texture_kernel(kernel == "compiler" ? detail::TextureKernel::compiler
+                                   : kernel == "avx2"   ? detail::TextureKernel::avx2
+                                                        : detail::TextureKernel::fastest);
+      }
       Params p;
       set_param(p, "preset", argv[3]);
       set_param(p, "threads", argv[4]);

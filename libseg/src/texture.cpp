@@ -178,8 +178,19 @@ void lbp_row_3d(const float* p, const std::ptrdiff_t* off, std::size_t n, std::u
 // arithmetic above is defined for any float (the conversions of NaN or huge values give INT_MIN,
 // below every step). Checking the centres as they are loaded replaced a separate check of each
 // plane before its texture (4.6 of 43 ms of this pass on one thread).
+//
+// Rows of 8 voxels or more end with a step that overlaps the one before (its voxels' results
+// depend on the map only) instead of a scalar tail, which cost a row of 318 as much as 40 of its
+// voxels. `any_recheck` is set when some voxel is kRecheck (no scan of the row for them).
 __attribute__((target("avx2"))) bool contrast_row_avx2(const float* p, const std::ptrdiff_t* off, std::size_t n,
-                                                       detail::code_t* out, std::uint8_t* lbp = nullptr) {
+                                                       detail::code_t* out, std::uint8_t* lbp, bool& any_recheck) {
+  if (n < 8) {
+    contrast_row_impl<63, true>(p, off, n, out);
+    if (lbp) lbp_row_impl<63>(p, off, n, lbp);
+    any_recheck = std::find(out, out + n, kRecheck) != out + n;
+    return probabilities_in_range(p, n);
+  }
+  __m256i rc = _mm256_setzero_si256();
   const __m256 zero = _mm256_setzero_ps(), err = _mm256_set1_ps(1e-6f), one = _mm256_set1_ps(1.0f);
   __m256 bad = zero;
   const __m256 fine = _mm256_set1_ps(static_cast<float>(ContrastQuantizer::kFine));
@@ -189,8 +200,7 @@ __attribute__((target("avx2"))) bool contrast_row_avx2(const float* p, const std
   // Offsets in locals: read through `off` they were reloaded every step (the stores to `out`
   // might alias them).
   const std::ptrdiff_t o[6] = {off[0], off[1], off[2], off[3], off[4], off[5]};
-  std::size_t x = 0;
-  for (; x + 8 <= n; x += 8) {
+  for (std::size_t x = 0;; x = std::min(x + 8, n - 8)) {
     const __m256 c = _mm256_loadu_ps(p + x);
     bad = _mm256_or_ps(bad, _mm256_or_ps(_mm256_cmp_ps(c, zero, _CMP_NGE_UQ), _mm256_cmp_ps(c, one, _CMP_NLE_UQ)));
     // Neighbours in pairs (x, y, z), the pair sums added as a tree: three additions deep instead
@@ -223,6 +233,7 @@ __attribute__((target("avx2"))) bool contrast_row_avx2(const float* p, const std
                                           _mm256_cmpeq_epi32(step, step_hi));
     const __m256i v = _mm256_blendv_epi8(recheck, _mm256_add_epi32(step, inc), sure);
     const __m256i res = _mm256_and_si256(v, two_sided);
+    rc = _mm256_or_si256(rc, _mm256_andnot_si256(sure, two_sided));
     // 32 -> 16 bits (values <= 0xFFFF): packus works per 128-bit half, the permute restores order.
     const __m256i packed = _mm256_permute4x64_epi64(_mm256_packus_epi32(res, res), 0x08);
     _mm_storeu_si128(reinterpret_cast<__m128i*>(out + x), _mm256_castsi256_si128(packed));
@@ -231,10 +242,10 @@ __attribute__((target("avx2"))) bool contrast_row_avx2(const float* p, const std
       const __m128i b8 = _mm_packus_epi16(_mm256_castsi256_si128(b16), _mm256_castsi256_si128(b16));
       _mm_storel_epi64(reinterpret_cast<__m128i*>(lbp + x), b8);
     }
+    if (x + 8 == n) break;
   }
-  contrast_row_impl<63, true>(p + x, off, n - x, out + x);
-  if (lbp) lbp_row_impl<63>(p + x, off, n - x, lbp + x);
-  return _mm256_testz_ps(bad, bad) && probabilities_in_range(p + x, n - x);
+  any_recheck = !_mm256_testz_si256(rc, rc);
+  return _mm256_testz_ps(bad, bad);
 }
 
 // contrast_row_avx2 for 16 voxels per step in AVX-512 (F only): the same operations in the same
@@ -344,22 +355,33 @@ __attribute__((target("avx2"))) std::size_t codes_row_avx2(const float* p, const
 
 // Pass 2 from parked LBP codes, 16 voxels per step, in place: row[x] = lbp[x] * bins + level,
 // the level from the parked step v = row[x] as in codes_row_avx2 (steps <= 4096 compare as
-// signed 16-bit values). Returns the voxels done (a multiple of 16); the caller finishes the row.
+// signed 16-bit values). Returns n.
 __attribute__((target("avx2"))) std::size_t codes_from_lbp_avx2(detail::code_t* row, const std::uint8_t* lbp,
                                                                 std::size_t n, const std::uint16_t* rises,
                                                                 std::size_t nr, std::uint16_t bins) {
   __m256i rise[16];
   for (std::size_t k = 0; k < nr; ++k) rise[k] = _mm256_set1_epi16(static_cast<short>(rises[k]));
   const __m256i zero = _mm256_setzero_si256(), one = _mm256_set1_epi16(1), b = _mm256_set1_epi16(static_cast<short>(bins));
-  std::size_t x = 0;
-  for (; x + 16 <= n; x += 16) {
-    const __m256i v = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(row + x));
+  // The last n % 16 voxels go through copies padded to 16 (the pass is in place: a step
+  // overlapping the one before would read codes as steps).
+  alignas(32) std::uint16_t last_v[16] = {};
+  alignas(16) std::uint8_t last_l[16] = {};
+  for (std::size_t x = 0; x < n; x += 16) {
+    const std::size_t m = std::min<std::size_t>(16, n - x);
+    std::uint16_t* const at = m == 16 ? row + x : last_v;
+    const std::uint8_t* const lat = m == 16 ? lbp + x : last_l;
+    if (m < 16) {
+      std::memcpy(last_v, row + x, m * sizeof(std::uint16_t));
+      std::memcpy(last_l, lbp + x, m);
+    }
+    const __m256i v = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(at));
     __m256i lvl = _mm256_andnot_si256(_mm256_cmpeq_epi16(v, zero), one);
     for (std::size_t k = 0; k < nr; ++k) lvl = _mm256_sub_epi16(lvl, _mm256_cmpgt_epi16(v, rise[k]));  // -(-1)
-    const __m256i l = _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(lbp + x)));
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(row + x), _mm256_add_epi16(_mm256_mullo_epi16(l, b), lvl));
+    const __m256i l = _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(lat)));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(at), _mm256_add_epi16(_mm256_mullo_epi16(l, b), lvl));
+    if (m < 16) std::memcpy(row + x, last_v, m * sizeof(std::uint16_t));
   }
-  return x;
+  return n;
 }
 
 #endif
@@ -644,7 +666,7 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
           if (sten.present == 63 && use_avx512_kernel()) {
             ok = contrast_row_avx512(prow0, sten.off, x1 - x0, row + x0, lrow, rechecks) && ok;
           } else if (sten.present == 63 && use_avx2_kernel()) {
-            ok = contrast_row_avx2(prow0, sten.off, x1 - x0, row + x0, lrow) && ok;
+            ok = contrast_row_avx2(prow0, sten.off, x1 - x0, row + x0, lrow, rechecks) && ok;
           } else
 #endif
           {
