@@ -1,9 +1,10 @@
 // Helper of bench/compare: writes the benchmark maps as .npy and times occseg::segment() on a
 // map file inside the process (no file I/O in the figures), reporting JSON on stdout.
 //   occseg_bench_segment make scene|noisy NX NY NZ out.npy
-//   occseg_bench_segment time map.npy PRESET THREADS REPEATS [context]
+//   occseg_bench_segment time map.npy PRESET THREADS REPEATS [context|context-fresh]
 // With "context" every call goes through one occseg::Context (its threads kept), and each result
-// not kept is handed back with Context::recycle, as a program segmenting map after map would.
+// not kept is handed back with Context::recycle, as a program segmenting map after map would;
+// "context-fresh" keeps the threads but recycles nothing (every call gets fresh label memory).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -47,7 +48,7 @@ void reset_peak() {
 int usage() {
   std::fprintf(stderr,
                "usage: occseg_bench_segment make scene|noisy NX NY NZ out.npy\n"
-               "       occseg_bench_segment time map.npy paper|default THREADS REPEATS [context]\n");
+               "       occseg_bench_segment time map.npy paper|default THREADS REPEATS [context|context-fresh]\n");
   return 2;
 }
 
@@ -62,7 +63,8 @@ int main(int argc, char** argv) {
       write_grid_npy(argv[6], kind == "scene" ? bench::scene(d) : bench::noisy(d));
       return 0;
     }
-    const bool timing = (argc == 6 || (argc == 7 && std::string(argv[6]) == "context")) &&
+    const bool timing = (argc == 6 || (argc == 7 && (std::string(argv[6]) == "context" ||
+                                                     std::string(argv[6]) == "context-fresh"))) &&
                         std::string(argv[1]) == "time";
     if (timing) {
       const Grid g = grid_from_npy(read_npy(argv[2]), 1.0, argv[2]);
@@ -80,6 +82,7 @@ int main(int argc, char** argv) {
       const int repeats = std::max(1, std::atoi(argv[5]));
       std::unique_ptr<Context> ctx;
       if (argc == 7) ctx = std::make_unique<Context>(p.threads);
+      const bool recycle = argc == 7 && std::string(argv[6]) == "context";
       auto run = [&] { return ctx ? segment(*ctx, g, p) : segment(g, p); };
       // Peak memory beyond the map (the result's labels included) of a first call and of a second
       // one after the first result is freed (or, with a context, recycled: the context then holds
@@ -92,7 +95,7 @@ int main(int argc, char** argv) {
       for (int call = 0; call < 2; ++call) {
         {
           Result first = run();
-          if (ctx) ctx->recycle(std::move(first));
+          if (recycle) ctx->recycle(std::move(first));
         }
         peak[call] = status_kb("VmHWM:");
         rss1 = std::max(rss1, peak[call]);
@@ -110,7 +113,7 @@ int main(int argc, char** argv) {
           best_total = s;
           std::swap(best, res);
         }
-        if (ctx) ctx->recycle(std::move(res));  // the slower of the two
+        if (recycle) ctx->recycle(std::move(res));  // the slower of the two
       }
       std::sort(totals.begin(), totals.end());
       std::uint64_t checksum = 1469598103934665603ull;  // FNV-1a over the labels

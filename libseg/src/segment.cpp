@@ -121,7 +121,9 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   std::vector<Block> blocks;
   st.begin("texture");
   if (op && op->native_into) {
-    resize_huge(r.labels, n);
+    resize_huge(r.labels, n);  // not zeroed (LabelArray): every stage writes before it reads
+    // Fresh pages faulted in (and zeroed by the system) over the threads, not by whichever
+    // stage first touches them; a recycled array's are in already and cost a write per page.
     touch_pages(r.labels.data(), n * sizeof(std::uint32_t), params.threads);
     // codes in bytes [0, 2n), the operator's scratch (LBP codes) in [2n, 3n)
     std::uint8_t* const bytes = reinterpret_cast<std::uint8_t*>(r.labels.data());

@@ -8,8 +8,8 @@
 namespace occseg {
 
 // segment(grid, params, keep_stages), writing the labels into `labels`' storage: when it holds
-// at least as many elements as the map has voxels, no fresh memory is allocated, zero-filled or
-// paged in for them (every label is written). The result is the same as segment()'s.
+// at least as many elements as the map has voxels, no fresh memory is allocated or paged in for
+// them (every label is written). The result is the same as segment()'s.
 Result segment_into(const Grid& grid, const Params& params, bool keep_stages, LabelArray&& labels);
 
 namespace detail {

@@ -275,9 +275,9 @@ OCCSEG_API int occseg_context_segment(occseg_result **out, occseg_context *conte
                                       const occseg_params *params);
 
 /* Frees `result` as occseg_result_free() does, but keeps its label array in `context`: the next
- * occseg_context_segment() on the context writes its labels there instead of allocating,
- * zero-filling and paging in 4 bytes per voxel of fresh memory (about 7 % of a call on a
- * 320 x 320 x 128 map). The context keeps one array, the last one handed back, until a call
+ * occseg_context_segment() on the context writes its labels there instead of allocating and
+ * paging in 4 bytes per voxel of fresh memory, whose pages the system zeroes (about 8 % of a call
+ * on a 320 x 320 x 128 map). The context keeps one array, the last one handed back, until a call
  * takes it (a map with more voxels than it holds gets fresh memory) or occseg_context_free():
  * 4 bytes per voxel held between calls, a trade the caller makes per result. The call that takes
  * it uses it for its scratch and its labels: its peak memory is that of a plain call.

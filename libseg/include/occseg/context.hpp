@@ -24,9 +24,9 @@ class Context {
   int threads() const;
 
   // Hands a result the caller is done with back to the context: the next segment(context, ...)
-  // writes its labels into this result's label array instead of allocating, zero-filling and
-  // paging in 4 bytes per voxel of fresh memory (about 7 % of a call on a 320 x 320 x 128 map,
-  // docs/performance.md). `result` is left empty. The context keeps one array, the last one
+  // writes its labels into this result's label array instead of allocating and paging in 4 bytes
+  // per voxel of fresh memory (whose pages the kernel zeroes: about 8 % of a call on a
+  // 320 x 320 x 128 map, docs/performance.md). `result` is left empty. The context keeps one array, the last one
   // handed back, until a call takes it (a map with more voxels than it holds gets fresh memory)
   // or the context is destroyed: 4 bytes per voxel held between calls. The call that takes it
   // uses it for its scratch and its labels, so that call's peak is a plain call's.
