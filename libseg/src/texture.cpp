@@ -422,6 +422,18 @@ void count_steps(const detail::code_t* v, std::size_t n, std::uint64_t* h) {
   for (; x < n; ++x) ++h[v[x]];
 }
 
+// Adds the steps list[0..len) to four interleaved histograms, as count_steps() does.
+inline void count_list(const std::uint16_t* list, std::size_t len, std::uint64_t* h) {
+  std::size_t i = 0;
+  for (; i + 4 <= len; i += 4) {
+    ++h[list[i]];
+    ++h[kStepStride + list[i + 1]];
+    ++h[2 * kStepStride + list[i + 2]];
+    ++h[3 * kStepStride + list[i + 3]];
+  }
+  for (; i < len; ++i) ++h[list[i]];
+}
+
 #ifdef OCCSEG_TEXTURE_AVX2
 // pshufb controls that move the 16-bit lanes set in an 8-bit mask to the front, in order.
 struct PackTable {
@@ -459,14 +471,7 @@ __attribute__((target("avx2"))) void count_steps_avx2(const detail::code_t* v, s
     len += static_cast<std::size_t>(__builtin_popcount(m));
   }
   for (; x < n; ++x) list[len] = v[x], len += v[x] != 0;
-  std::size_t i = 0;
-  for (; i + 4 <= len; i += 4) {
-    ++h[list[i]];
-    ++h[kStepStride + list[i + 1]];
-    ++h[2 * kStepStride + list[i + 2]];
-    ++h[3 * kStepStride + list[i + 3]];
-  }
-  for (; i < len; ++i) ++h[list[i]];
+  count_list(list, len, h);
 }
 #endif
 
@@ -476,27 +481,15 @@ __attribute__((target("avx2"))) void count_steps_avx2(const detail::code_t* v, s
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // see contrast_row_avx512
 __attribute__((target("avx512f,avx512bw,avx512vl,avx512vbmi2"))) void count_steps_avx512(const detail::code_t* v, std::size_t n,
                                                                                std::uint64_t* h, std::uint16_t* list) {
-  std::size_t x = 0, len = 0;
-  for (; x + 32 <= n; x += 32) {
-    const __m512i s = _mm512_loadu_si512(v + x);
+  std::size_t len = 0;
+  for (std::size_t x = 0; x < n; x += 32) {  // the last n % 32 masked
+    const auto in = static_cast<__mmask32>(n - x >= 32 ? ~0u : (1u << (n - x)) - 1);
+    const __m512i s = _mm512_maskz_loadu_epi16(in, v + x);
     const __mmask32 m = _mm512_test_epi16_mask(s, s);
     _mm512_storeu_si512(list + len, _mm512_maskz_compress_epi16(m, s));
     len += static_cast<std::size_t>(__builtin_popcount(m));
   }
-  if (x < n) {  // the last n - x, masked
-    const __m512i s = _mm512_maskz_loadu_epi16(static_cast<__mmask32>((1ull << (n - x)) - 1), v + x);
-    const __mmask32 m = _mm512_test_epi16_mask(s, s);
-    _mm512_storeu_si512(list + len, _mm512_maskz_compress_epi16(m, s));
-    len += static_cast<std::size_t>(__builtin_popcount(m));
-  }
-  std::size_t i = 0;
-  for (; i + 4 <= len; i += 4) {
-    ++h[list[i]];
-    ++h[kStepStride + list[i + 1]];
-    ++h[2 * kStepStride + list[i + 2]];
-    ++h[3 * kStepStride + list[i + 3]];
-  }
-  for (; i < len; ++i) ++h[list[i]];
+  count_list(list, len, h);
 }
 
 // codes_from_lbp_avx2() for 32 voxels per step (AVX-512 BW): the same operations on each lane,

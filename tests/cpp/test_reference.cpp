@@ -162,6 +162,14 @@ TEST(Reference, ContrastsOnStepBoundariesMatch) {
 // The unknown growth on bit masks against the reference's six byte scans, on random per-voxel
 // states (runs of candidates start and end anywhere, also across 64-voxel words and at the row
 // ends), rows of 1 to 200 voxels, any thread count, masks in dirty caller storage or their own.
+namespace {
+// A map value: 0.5 for a share `half` of the voxels, else 0.2 or 0.9 evenly.
+float band_value(test::Rng& r, double half) {
+  const double u = r.uniform();
+  return u < half ? 0.5f : (u < (1 + half) / 2 ? 0.2f : 0.9f);
+}
+}  // namespace
+
 TEST(Reference, UnknownGrowthMatchesOnRandomStates) {
   const Dims dims[] = {{1, 1, 50}, {63, 3, 4}, {64, 5, 3}, {65, 4, 6}, {130, 3, 3}, {200, 7, 5}, {129, 1, 1}};
   std::uint64_t seed = 1;
@@ -172,8 +180,7 @@ TEST(Reference, UnknownGrowthMatchesOnRandomStates) {
       std::vector<std::uint8_t> st(d.count());
       const double half = 0.3 + 0.2 * round;  // share of voxels at 0.5
       for (std::size_t i = 0; i < st.size(); ++i) {
-        const double u = r.uniform();
-        g.p[i] = u < half ? 0.5f : (u < (1 + half) / 2 ? 0.2f : 0.9f);
+        g.p[i] = band_value(r, half);
         const double v = r.uniform();
         st[i] = v < 0.55 ? 0 : (v < 0.85 ? 1 : 2);
       }
@@ -222,8 +229,7 @@ TEST(Reference, VoxelRulesMatchOnRandomStates) {
       std::vector<std::uint8_t> st(d.count());
       const double half = 0.4 + 0.2 * round;  // share of voxels at 0.5
       for (std::size_t i = 0; i < st.size(); ++i) {
-        const double u = r.uniform();
-        g.p[i] = u < half ? 0.5f : (u < (1 + half) / 2 ? 0.2f : 0.9f);
+        g.p[i] = band_value(r, half);
         st[i] = static_cast<std::uint8_t>(r.below(3));
       }
       std::vector<std::uint8_t> want = st;
