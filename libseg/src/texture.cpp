@@ -654,8 +654,8 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
           // With scratch, the LBP codes now, from the contrast kernel's own comparisons: pass 2
           // then reads 3 bytes per voxel instead of the map's rows again.
           std::uint8_t* lrow = lbp_scratch ? lbp_scratch + nx * (y + ny * z) + x0 : nullptr;
-#ifdef OCCSEG_TEXTURE_AVX2
           bool rechecks = true;  // unless the kernel says there are none
+#ifdef OCCSEG_TEXTURE_AVX2
           if (sten.present == 63 && use_avx512_kernel()) {
             ok = contrast_row_avx512(prow0, sten.off, x1 - x0, row + x0, lrow, rechecks) && ok;
           } else if (sten.present == 63 && use_avx2_kernel()) {
