@@ -54,10 +54,12 @@ Outcome read_as(const std::string& format, const std::string& path) {
   return o;
 }
 
-// A small .ot (OcTree) written by OctoMap, as base for the .ot rows.
+// A small .ot (OcTree) written by OctoMap, as base for the .ot rows. Several tests use it, and
+// ctest runs them as separate processes at once: each writes its own (a shared directory was
+// emptied by one while another wrote into it).
 std::string small_ot() {
   static const std::string path = [] {
-    const std::string p = scratch("ot_base") + "/small.ot";
+    const std::string p = scratch("ot_base_" + std::to_string(getpid())) + "/small.ot";
     octomap::OcTree t(0.1);
     for (int i = -5; i <= 5; ++i) t.updateNode(octomap::point3d(0.1f * i, 0.05f, 0.3f), float(0.4 * i));
     t.write(p);
