@@ -41,7 +41,8 @@ namespace {
 // of them), each sum's additions in the scalar loop's order (acc += v[0], then v[1], ...): eight
 // cells at a time, their 8 x 8 floats transposed so that lane k holds cell k, then converted and
 // added in double, four lanes per register. The same additions as the scalar loop, so the same
-// sums; a third of its instructions (creation 6.4 -> ... ms on two threads, docs/performance.md).
+// sums; a third of its instructions (with the states no longer zeroed, creation 7.5 -> 5.5 ms on
+// two threads; docs/performance.md, "Sixth round").
 __attribute__((target("avx2"))) void add_cells_avx2(const float* v, double* sums, std::size_t cells) {
   for (std::size_t k = 0; k + 8 <= cells; k += 8, v += 64) {
     __m256 r[8];

@@ -191,38 +191,35 @@ __attribute__((target("avx2"))) inline __m256i bytes_of_bits32(const word_t* bit
   return _mm256_cmpeq_epi8(_mm256_and_si256(_mm256_shuffle_epi8(b, pick), sel), sel);
 }
 
-// rules_row() for rows of at least 34 voxels, 32 voxels per step in hand-written AVX2, with the
-// region read from its bit row (no byte row unpacked first) and the seed flag gathered in the
-// same loop; the last step overlaps the one before instead of a scalar tail (the rules are
-// idempotent: a second application to a result gives the result). GCC's vectorised rules_row
-// spent two thirds of its instructions on a row of 320 in its scalar tails and second pass.
 __attribute__((target("avx2"))) inline __m256i at32(const std::uint8_t* p, std::size_t x) {
   return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + x));
 }
 
-// The rules on voxels x .. x + 31 of a row; returns the candidates for seeds (0xFF).
+// rule() on voxels x .. x + 31 of a row, in place; returns the candidates for seeds (0xFF).
 __attribute__((target("avx2"))) inline __m256i rules_step_avx2(std::uint8_t* st, const std::uint8_t* own,
                                                                const word_t* region, const std::uint8_t* ym,
                                                                const std::uint8_t* yp, const std::uint8_t* zm,
                                                                const std::uint8_t* zp, std::size_t x) {
   const __m256i occ = _mm256_set1_epi8(static_cast<char>(kOccupied)), unk = _mm256_set1_epi8(static_cast<char>(kUnknown));
   const __m256i fre = _mm256_set1_epi8(static_cast<char>(kFree));
-  const auto at = at32;
-  {
-    const __m256i o = at(own, x), s = at(st, x);
-    const __m256i touches =
-        _mm256_or_si256(_mm256_or_si256(_mm256_cmpeq_epi8(at(own, x - 1), occ), _mm256_cmpeq_epi8(at(own, x + 1), occ)),
-                        _mm256_or_si256(_mm256_or_si256(_mm256_cmpeq_epi8(at(ym, x), occ), _mm256_cmpeq_epi8(at(yp, x), occ)),
-                                        _mm256_or_si256(_mm256_cmpeq_epi8(at(zm, x), occ), _mm256_cmpeq_epi8(at(zp, x), occ))));
-    const __m256i reg = bytes_of_bits32(region, x);
-    const __m256i gap = _mm256_blendv_epi8(s, unk, _mm256_and_si256(_mm256_cmpeq_epi8(s, fre), touches));
-    const __m256i own_unknown = _mm256_cmpeq_epi8(o, unk);
-    const __m256i res = _mm256_blendv_epi8(o, _mm256_blendv_epi8(gap, unk, reg), own_unknown);
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(st + x), res);
-    return _mm256_andnot_si256(reg, _mm256_and_si256(own_unknown, _mm256_cmpeq_epi8(res, unk)));
-  }
+  const __m256i o = at32(own, x), s = at32(st, x);
+  const __m256i touches =
+      _mm256_or_si256(_mm256_or_si256(_mm256_cmpeq_epi8(at32(own, x - 1), occ), _mm256_cmpeq_epi8(at32(own, x + 1), occ)),
+                      _mm256_or_si256(_mm256_or_si256(_mm256_cmpeq_epi8(at32(ym, x), occ), _mm256_cmpeq_epi8(at32(yp, x), occ)),
+                                      _mm256_or_si256(_mm256_cmpeq_epi8(at32(zm, x), occ), _mm256_cmpeq_epi8(at32(zp, x), occ))));
+  const __m256i reg = bytes_of_bits32(region, x);
+  const __m256i gap = _mm256_blendv_epi8(s, unk, _mm256_and_si256(_mm256_cmpeq_epi8(s, fre), touches));
+  const __m256i own_unknown = _mm256_cmpeq_epi8(o, unk);
+  const __m256i res = _mm256_blendv_epi8(o, _mm256_blendv_epi8(gap, unk, reg), own_unknown);
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(st + x), res);
+  return _mm256_andnot_si256(reg, _mm256_and_si256(own_unknown, _mm256_cmpeq_epi8(res, unk)));
 }
 
+// rules_row() for rows of at least 34 voxels, 32 voxels per step in hand-written AVX2, with the
+// region read from its bit row (no byte row unpacked first) and the seed flag gathered in the
+// same loop; the last step overlaps the one before instead of a scalar tail (the rules are
+// idempotent: a second application to a result gives the result). GCC's vectorised rules_row
+// spent two thirds of its instructions on a row of 320 in its scalar tails and second pass.
 __attribute__((target("avx2"))) bool rules_row_avx2(std::uint8_t* st, const std::uint8_t* own, const word_t* region,
                                                     const std::uint8_t* ym, const std::uint8_t* yp,
                                                     const std::uint8_t* zm, const std::uint8_t* zp, std::size_t n) {
