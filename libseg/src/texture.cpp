@@ -248,10 +248,6 @@ __attribute__((target("avx2"))) bool contrast_row_avx2(const float* p, const std
   return _mm256_testz_ps(bad, bad);
 }
 
-// contrast_row_avx2 for 16 voxels per step in AVX-512 (F only): the same operations in the same
-// order on each lane, so the same steps, LBP codes and check; comparisons go to mask registers,
-// which removes the and/andnot selections and the register spills of the AVX2 loop (about 105
-// instructions per 8 voxels there). The last n % 16 voxels go to the AVX2 kernel.
 // (GCC 12 warns inside its own AVX-512 intrinsics, whose pass-through operands are deliberately
 // undefined.)
 #pragma GCC diagnostic push
