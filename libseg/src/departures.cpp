@@ -177,20 +177,6 @@ bool rules_row(std::uint8_t* __restrict st, const std::uint8_t* __restrict own, 
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #define OCCSEG_RULES_AVX2 1
-// Bits x .. x + 31 of a bit row as 32 bytes, 0xFF where set. The bits may straddle two words;
-// the second is read only then (it lies in the row while x + 31 is in it).
-__attribute__((target("avx2"))) inline __m256i bytes_of_bits32(const word_t* bits, std::size_t x) {
-  std::uint64_t w = bits[x / 64] >> (x % 64);
-  if (x % 64 > 32) w |= bits[x / 64 + 1] << (64 - x % 64);
-  const __m256i b = _mm256_set1_epi32(static_cast<int>(static_cast<std::uint32_t>(w)));
-  // byte i of the result takes byte i / 8 of the 32 bits (a shuffle stays within 128-bit halves,
-  // each of which holds all four)
-  const __m256i pick = _mm256_setr_epi8(0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1, 1, 2, 2, 2, 2, 2, 2, 2, 2, 3, 3,
-                                        3, 3, 3, 3, 3, 3);
-  const __m256i sel = _mm256_set1_epi64x(static_cast<long long>(0x8040201008040201ull));
-  return _mm256_cmpeq_epi8(_mm256_and_si256(_mm256_shuffle_epi8(b, pick), sel), sel);
-}
-
 __attribute__((target("avx2"))) inline __m256i at32(const std::uint8_t* p, std::size_t x) {
   return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + x));
 }
@@ -207,7 +193,7 @@ __attribute__((target("avx2"))) inline __m256i rules_step_avx2(std::uint8_t* st,
       _mm256_or_si256(_mm256_or_si256(_mm256_cmpeq_epi8(at32(own, x - 1), occ), _mm256_cmpeq_epi8(at32(own, x + 1), occ)),
                       _mm256_or_si256(_mm256_or_si256(_mm256_cmpeq_epi8(at32(ym, x), occ), _mm256_cmpeq_epi8(at32(yp, x), occ)),
                                       _mm256_or_si256(_mm256_cmpeq_epi8(at32(zm, x), occ), _mm256_cmpeq_epi8(at32(zp, x), occ))));
-  const __m256i reg = bytes_of_bits32(region, x);
+  const __m256i reg = detail::bytes_of_bits32(region, x);
   const __m256i gap = _mm256_blendv_epi8(s, unk, _mm256_and_si256(_mm256_cmpeq_epi8(s, fre), touches));
   const __m256i own_unknown = _mm256_cmpeq_epi8(o, unk);
   const __m256i res = _mm256_blendv_epi8(o, _mm256_blendv_epi8(gap, unk, reg), own_unknown);

@@ -27,12 +27,9 @@ namespace {
 constexpr std::uint8_t kFree = static_cast<std::uint8_t>(State::free);
 constexpr std::uint8_t kUnknown = static_cast<std::uint8_t>(State::unknown);
 
-// W and C of one row of voxels (bits past nx stay 0).
-void pack_row(const std::uint8_t* st, const std::uint8_t* own, std::size_t nx, word_t* w, word_t* c) {
-  const std::size_t words = (nx + 63) / 64;
-  std::fill(w, w + words, 0);
-  std::fill(c, c + words, 0);
-  std::size_t x = 0;
+// W and C of voxels x .. nx - 1 of a row (x a multiple of 16) into cleared words.
+void pack_rest(const std::uint8_t* st, const std::uint8_t* own, std::size_t x, std::size_t nx, word_t* w,
+               word_t* c) {
 #ifdef __SSE2__
   const __m128i unknown = _mm_set1_epi8(static_cast<char>(kUnknown)), free = _mm_set1_epi8(static_cast<char>(kFree));
   for (; x + 16 <= nx; x += 16) {
@@ -48,9 +45,17 @@ void pack_row(const std::uint8_t* st, const std::uint8_t* own, std::size_t nx, w
   }
 }
 
+// W and C of one row of voxels (bits past nx stay 0).
+void pack_row(const std::uint8_t* st, const std::uint8_t* own, std::size_t nx, word_t* w, word_t* c) {
+  const std::size_t words = (nx + 63) / 64;
+  std::fill(w, w + words, 0);
+  std::fill(c, c + words, 0);
+  pack_rest(st, own, 0, nx, w, c);
+}
+
 #if defined(__x86_64__) && defined(__GNUC__)
 #define OCCSEG_GROWTH_AVX2 1
-// pack_row() 32 voxels per step (their bits lie in one word); the scalar loop takes the rest.
+// pack_row() 32 voxels per step (their bits lie in one word); pack_rest() takes the rest.
 __attribute__((target("avx2"))) void pack_row_avx2(const std::uint8_t* st, const std::uint8_t* own, std::size_t nx,
                                                    word_t* w, word_t* c) {
   const std::size_t words = (nx + 63) / 64;
@@ -61,16 +66,10 @@ __attribute__((target("avx2"))) void pack_row_avx2(const std::uint8_t* st, const
   for (; x + 32 <= nx; x += 32) {
     const __m256i s = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(st + x));
     const __m256i o = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(own + x));
-    const auto mw = static_cast<std::uint32_t>(_mm256_movemask_epi8(_mm256_cmpeq_epi8(s, unknown)));
-    const auto mc = static_cast<std::uint32_t>(
-        _mm256_movemask_epi8(_mm256_and_si256(_mm256_cmpeq_epi8(s, free), _mm256_cmpeq_epi8(o, unknown))));
-    w[x / 64] |= static_cast<std::uint64_t>(mw) << (x % 64);
-    c[x / 64] |= static_cast<std::uint64_t>(mc) << (x % 64);
+    set_bits32(w, x, _mm256_cmpeq_epi8(s, unknown));
+    set_bits32(c, x, _mm256_and_si256(_mm256_cmpeq_epi8(s, free), _mm256_cmpeq_epi8(o, unknown)));
   }
-  for (; x < nx; ++x) {
-    w[x / 64] |= static_cast<std::uint64_t>(st[x] == kUnknown) << (x % 64);
-    c[x / 64] |= static_cast<std::uint64_t>(st[x] == kFree && own[x] == kUnknown) << (x % 64);
-  }
+  pack_rest(st, own, x, nx, w, c);
 }
 #endif
 
