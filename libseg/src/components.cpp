@@ -128,6 +128,22 @@ inline std::size_t next_start(const std::uint8_t* bits, std::size_t i, std::size
   return end;
 }
 
+// next_start() reading no byte past the one of voxel end - 1: while the slabs are being
+// labelled, the bytes after a slab's are the next slab's (slabs start on a byte).
+inline std::size_t next_start_in(const std::uint8_t* bits, std::size_t i, std::size_t end) {
+  const std::size_t last = (end + 7) / 8;  // bytes [0, last) may be read
+  while (i < end) {
+    std::uint64_t w = 0;
+    const std::size_t at = i / 8;
+    if (at + sizeof w <= last) std::memcpy(&w, bits + at, sizeof w);  // little-endian, as in next_start
+    else std::memcpy(&w, bits + at, last - at);
+    w >>= i % 8;
+    if (w) return std::min(end, i + static_cast<std::size_t>(__builtin_ctzll(w)));
+    i += 64 - i % 8;
+  }
+  return end;
+}
+
 // The sum of a run's values v[0, n) (a run: a maximal stretch of one segment along x), the
 // documented order of the mean occupancy (components.hpp): voxel k adds to lane k % 8 in turn,
 // the lanes are added as ((l0 + l1) + (l2 + l3)) + ((l4 + l5) + (l6 + l7)). Eight chains of
@@ -188,6 +204,7 @@ void label_states(const std::uint8_t* s, const std::function<void()>& release, c
           const std::size_t e = run_end(row, x, nx);
           const auto rs = static_cast<std::uint32_t>(i0 + x);
           lab[rs] = rs;
+          starts[rs / 8] = static_cast<std::uint8_t>(starts[rs / 8] | (1u << (rs % 8)));
           const std::uint8_t v = row[x];
           auto with = [&](std::size_t other0) {  // unites with the run starting at other0 + j
             return [&, other0](std::size_t j) { unite(lab, rs, static_cast<std::uint32_t>(other0 + j)); };
@@ -210,18 +227,16 @@ void label_states(const std::uint8_t* s, const std::function<void()>& release, c
         }
       }
     // Local numbering: a run start's parent is a smaller run start of the slab, already
-    // renumbered (the parent entries are being overwritten in index order).
+    // renumbered (the parent entries are being overwritten in index order). The run starts are
+    // found in their bits, not by scanning the states again.
     std::uint32_t m = 0;
-    for (std::size_t i0 = zb * sz; i0 < ze * sz; i0 += nx)
-      for (std::size_t x = 0; x < nx;) {
-        const std::size_t e = run_end(s + i0, x, nx);
-        const std::size_t rs = i0 + x;
-        starts[rs / 8] = static_cast<std::uint8_t>(starts[rs / 8] | (1u << (rs % 8)));
-        const std::uint32_t par = lab[rs];
-        if (par == rs) local_state[sl].push_back(s[rs]);
-        lab[rs] = par == rs ? m++ : lab[par];
-        x = e;
-      }
+    const std::size_t end = ze * sz;
+    for (std::size_t rs = next_start_in(starts.data(), zb * sz, end); rs < end;
+         rs = next_start_in(starts.data(), rs + 1, end)) {
+      const std::uint32_t par = lab[rs];
+      if (par == rs) local_state[sl].push_back(s[rs]);
+      lab[rs] = par == rs ? m++ : lab[par];
+    }
     local_count[sl] = m;
   });
 

@@ -292,7 +292,16 @@ namespace {
 class Splitter {
  public:
   Splitter(const Grid& g, LabelArray& labels, std::vector<Segment>& segments, bool occupied26)
-      : g_(g), d_(g.dims), labels_(labels), segs_(segments), conn26_(occupied26) {}
+      : g_(g), d_(g.dims), labels_(labels), segs_(segments), conn26_(occupied26) {
+    const auto sy = static_cast<std::ptrdiff_t>(d_.nx), sz = static_cast<std::ptrdiff_t>(d_.nx * d_.ny);
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int off = std::abs(dx) + std::abs(dy) + std::abs(dz);
+          if (off == 0 || (!conn26_ && off != 1)) continue;
+          offsets_[neighbours_++] = dx + dy * sy + dz * sz;
+        }
+  }
 
   // Examines segment `s`. Its voxels are [first, last) in scan order when the caller bucketed
   // them, else (first = nullptr) they are found by scanning its box.
@@ -362,10 +371,6 @@ class Splitter {
 
   Vec coords(std::size_t i) const {
     return {double(i % d_.nx), double((i / d_.nx) % d_.ny), double(i / (d_.nx * d_.ny))};
-  }
-  bool on_plane(std::size_t i) const {
-    const Vec c = coords(i);
-    return std::fabs(plane_.distance(c[0], c[1], c[2])) <= kPlaneInlierDistance;
   }
 
   // The coordinates of the voxels of s with the given ranks (ascending) in scan order, into pts.
@@ -462,10 +467,17 @@ class Splitter {
     return true;
   }
 
-  // Calls f(neighbour index) for the 6 or 26 neighbours of voxel i inside the grid.
+  // Calls f(neighbour index) for the 6 or 26 neighbours of voxel i inside the grid, in the order
+  // of their offsets (z, then y, then x, each from -1 to +1). A voxel off the grid's faces takes
+  // the precomputed offsets without a test per neighbour (the floods of the split spent 90 ns
+  // per voxel on those tests and the coordinates).
   template <class F>
   void for_neighbours(std::size_t i, F&& f) const {
     const std::size_t x = i % d_.nx, y = (i / d_.nx) % d_.ny, z = i / (d_.nx * d_.ny);
+    if (x > 0 && y > 0 && z > 0 && x + 1 < d_.nx && y + 1 < d_.ny && z + 1 < d_.nz) {
+      for (std::size_t k = 0; k < neighbours_; ++k) f(i + static_cast<std::size_t>(offsets_[k]));
+      return;
+    }
     for (int dz = -1; dz <= 1; ++dz)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
@@ -478,10 +490,10 @@ class Splitter {
         }
   }
 
-  // Flood-fills the voxels labelled `from` that `same(seed, voxel)` accepts, from `seed`, writing
-  // `to`; returns the voxels filled.
-  template <class Same, class Visit>
-  void flood(std::uint32_t seed, std::uint32_t from, std::uint32_t to, Same&& same, Visit&& visit) {
+  // Flood-fills the voxels labelled `from` connected to `seed`, writing `to`; calls visit(voxel)
+  // for each.
+  template <class Visit>
+  void flood(std::uint32_t seed, std::uint32_t from, std::uint32_t to, Visit&& visit) {
     stack_.assign(1, seed);
     labels_[seed] = to;
     while (!stack_.empty()) {
@@ -489,7 +501,7 @@ class Splitter {
       stack_.pop_back();
       visit(v);
       for_neighbours(v, [&](std::size_t w) {
-        if (labels_[w] == from && same(w)) {
+        if (labels_[w] == from) {
           labels_[w] = to;
           stack_.push_back(static_cast<std::uint32_t>(w));
         }
@@ -497,17 +509,22 @@ class Splitter {
     }
   }
 
-  // Connected pieces of the plane's inliers and of the rest, each labelled temp(k).
+  // Connected pieces of the plane's inliers and of the rest, each labelled temp(k). The inliers
+  // are relabelled kKeep first (free until relabel()), the rest stay s, so the floods compare
+  // labels only: testing each neighbour's side of the plane cost 0.8 ms on one 7168-voxel
+  // segment, serially.
   void make_pieces(std::uint32_t s) {
     pieces_.clear();
+    for (std::size_t m = 0; m < members_.size(); ++m)
+      if (std::fabs(plane_.distance(pts_[m][0], pts_[m][1], pts_[m][2])) <= kPlaneInlierDistance)
+        labels_[members_[m]] = kKeep;
     for (std::uint32_t v : members_) {
-      if (labels_[v] != s) continue;
+      const std::uint32_t from = labels_[v];
+      if (from != s && from != kKeep) continue;
       Piece p;
-      p.on_plane = on_plane(v);
+      p.on_plane = from == kKeep;
       p.first = v;
-      const bool cls = p.on_plane;
-      flood(v, s, temp(pieces_.size()), [&](std::size_t w) { return on_plane(w) == cls; },
-            [&](std::uint32_t w) {
+      flood(v, from, temp(pieces_.size()), [&](std::uint32_t w) {
               const Vec c = coords(w);
               const double dist = plane_.distance(c[0], c[1], c[2]);
               ++p.voxels;
@@ -535,7 +552,7 @@ class Splitter {
     for (std::uint32_t v : members_) {
       if (labels_[v] != kKeep) continue;
       std::vector<std::uint32_t> voxels;
-      flood(v, kKeep, temp(next), [](std::size_t) { return true; }, [&](std::uint32_t w) { voxels.push_back(w); });
+      flood(v, kKeep, temp(next), [&](std::uint32_t w) { voxels.push_back(w); });
       std::size_t into = 0;
       if (next > pieces_.size() && voxels.size() < kMinObjectVoxels)
         for (std::size_t i = 0; i < voxels.size() && !into; ++i)
@@ -603,6 +620,8 @@ class Splitter {
   LabelArray& labels_;
   std::vector<Segment>& segs_;
   const bool conn26_;
+  std::ptrdiff_t offsets_[26];  // of the neighbours, in for_neighbours' order
+  std::size_t neighbours_ = 0;  // 6 or 26
   Plane plane_;
   std::vector<std::uint32_t> members_, stack_;
   std::vector<Vec> pts_;
