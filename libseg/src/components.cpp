@@ -37,6 +37,31 @@ inline void unite(std::uint32_t* parent, std::uint32_t a, std::uint32_t b) {
   parent[a] = b;
 }
 
+// find() and unite() for several threads uniting in one forest at once (the slab join): a root
+// becomes a child only by a compare-and-swap from itself, and every entry only ever moves to a
+// smaller index of its own set, so the sets and their roots (their smallest index) come out the
+// same whatever the threads' interleaving.
+inline std::uint32_t find_shared(std::uint32_t* parent, std::uint32_t i) {
+  while (true) {
+    const std::uint32_t p = __atomic_load_n(&parent[i], __ATOMIC_RELAXED);
+    if (p == i) return i;
+    const std::uint32_t g = __atomic_load_n(&parent[p], __ATOMIC_RELAXED);
+    if (g != p) __atomic_store_n(&parent[i], g, __ATOMIC_RELAXED);  // halving: g is an ancestor of i too
+    i = g;
+  }
+}
+
+inline void unite_shared(std::uint32_t* parent, std::uint32_t a, std::uint32_t b) {
+  while (true) {
+    a = find_shared(parent, a);
+    b = find_shared(parent, b);
+    if (a == b) return;
+    if (a < b) std::swap(a, b);
+    std::uint32_t expected = a;  // a is still a root: hang it under b
+    if (__atomic_compare_exchange_n(&parent[a], &expected, b, false, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) return;
+  }
+}
+
 // First x in [x, e) with (s[x] == v) == want, or e. 16 voxels per step where SSE2 exists
 // (every x86-64): runs of one state are long in real maps.
 inline std::size_t find_first(const std::uint8_t* s, std::uint8_t v, bool want, std::size_t x, std::size_t e) {
@@ -247,15 +272,16 @@ void label_states(const std::uint8_t* s, const std::function<void()>& release, c
   for (std::size_t sl = 0; sl < slabs; ++sl) base[sl + 1] = base[sl] + local_count[sl];
   std::vector<std::uint32_t> parent(base[slabs]);
   for (std::uint32_t k = 0; k < base[slabs]; ++k) parent[k] = k;
-  for (std::size_t sl = 1; sl < slabs; ++sl) {
-    const std::size_t z = sl * kLabelSlab;
+  // The slabs' first planes at once, on the threads (serially, 1.1 of the scene's 12.5 ms).
+  for_each_slab(slabs - 1, threads, [&](std::size_t boundary) {
+    const std::size_t sl = boundary + 1, z = sl * kLabelSlab;
     for (std::size_t y = 0; y < ny; ++y) {
       const std::size_t i0 = nx * (y + ny * z), j0 = i0 - sz;  // this row, the row below
       const std::uint8_t *a = s + i0, *b = s + j0;
       // Runs [xa, ea) of this row and [xb, eb) of the row below, stepped along together.
       std::size_t xa = 0, xb = 0, ea = run_end(a, 0, nx), eb = run_end(b, 0, nx);
       while (true) {
-        if (a[xa] == b[xb]) unite(parent.data(), base[sl] + lab[i0 + xa], base[sl - 1] + lab[j0 + xb]);
+        if (a[xa] == b[xb]) unite_shared(parent.data(), base[sl] + lab[i0 + xa], base[sl - 1] + lab[j0 + xb]);
         const std::size_t e = std::min(ea, eb);
         if (e == nx) break;
         if (ea == e) xa = ea, ea = run_end(a, xa, nx);
@@ -272,13 +298,13 @@ void label_states(const std::uint8_t* s, const std::function<void()>& release, c
           for (std::size_t yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < ny; ++yy) {
             const std::size_t k0 = nx * (yy + ny * (z - 1));
             for_each_run_in(s + k0, kOccupiedState, lo, hi,
-                            [&](std::size_t j) { unite(parent.data(), ga, base[sl - 1] + lab[k0 + j]); });
+                            [&](std::size_t j) { unite_shared(parent.data(), ga, base[sl - 1] + lab[k0 + j]); });
           }
         }
         x = e;
       }
     }
-  }
+  });
   // Final ids in order of first voxel: a component's root precedes it.
   std::vector<std::uint32_t> final_id(base[slabs]);
   std::vector<std::uint8_t> state_of;  // per final id
