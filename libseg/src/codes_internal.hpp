@@ -13,14 +13,17 @@
 
 namespace occseg::detail {
 
+class CellRows;  // own_states_internal.hpp
+
 typedef std::uint16_t __attribute__((__may_alias__)) code_t;
 
 // compute_texture() writing the codes into `codes` (grid.dims.count() entries) instead of a
 // fresh array. Same codes, same errors. With `lbp_scratch` (grid.dims.count() bytes, any
 // storage), the first pass parks the LBP codes there and the second reads them instead of the
-// map.
+// map. With `rows`, the first pass also adds every row of the map to it, right after the row's
+// texture (while the row is in the cache), each kMeanCell planes on one thread.
 void compute_texture_into(const Grid& grid, int contrast_bins, int threads, code_t* codes,
-                          std::uint8_t* lbp_scratch = nullptr);
+                          std::uint8_t* lbp_scratch = nullptr, CellRows* rows = nullptr);
 
 // divide() on codes in any storage: `code_count` distinct codes (TextureMap::code_count()).
 // faces_only: kNoTexture codes lie only on the map's outer faces (the built-in operator's codes;

@@ -41,14 +41,41 @@ inline void own_states_of(const float* p, std::size_t n, float lo, float hi, std
   for (; i < n; ++i) out[i] = static_cast<std::uint8_t>(p[i] < lo ? 0 : (p[i] > hi ? 2 : 1));
 }
 
+// Creation's reading of the map, row by row: each voxel's own state (into `own`, when given) and
+// the sum of each kMeanCell^3 cell of the lattice anchored at voxel 0 (the far faces cut the last
+// ones), its rows added in scan order, each row's voxels in x order: the order of
+// mean_occupancy(). segment() has the texture's first pass do it while each row is in the cache
+// (it reads the map anyway): creation then reads only these sums, not the 52 MB of a
+// 320 x 320 x 128 map (docs/performance.md, "Seventh round"). The rows of one cell must be added
+// by one thread, in scan order.
+class CellRows {
+ public:
+  CellRows(const Grid& grid, std::uint8_t* own, float lo, float hi);
+  void add_row(std::size_t y, std::size_t z);
+  const std::vector<double>& sums() const { return sum_; }  // cell (x, y, z) at x + ncx * (y + ncy * z)
+  std::size_t cells_x() const { return ncx_; }
+  std::size_t cells_y() const { return ncy_; }
+
+ private:
+  const Grid* grid_;
+  std::uint8_t* own_;
+  float lo_, hi_;
+  std::size_t ncx_, ncy_;
+  bool avx2_, avx512_;
+  std::vector<double> sum_;
+};
+
 // create_segments(), also writing every voxel's own state into `own` (grid.dims.count() bytes,
 // any storage: segment() uses the label array) while it reads the map for the block means: the
 // separate own_states() pass read the 52 MB of a 320 x 320 x 128 map once more. When the blocks
 // tile the map (division's leaves do), `own` equals own_states(grid, params); voxels outside
 // every block are not written. The states are not zeroed first: the blocks must tile the map
-// (division's leaves do), or the voxels outside every block hold garbage.
+// (division's leaves do), or the voxels outside every block hold garbage. With `summed` (every
+// row of the map added, with `own` and float_bounds() of params), the map is read only for
+// blocks off the lattice of cells.
 UninitVector<std::uint8_t> create_segments_and_own_states(const Grid& grid, const std::vector<Block>& blocks,
-                                                          const Params& params, std::uint8_t* own);
+                                                          const Params& params, std::uint8_t* own,
+                                                          const CellRows* summed = nullptr);
 // For tests: the block means as creation sums them when the blocks tile the map on the lattice of
 // kMeanCell^3 cells (row by row, into the cells' sums); empty for other blocks.
 std::vector<double> block_means_by_rows(const Grid& grid, const std::vector<Block>& blocks, int threads);

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <mutex>
+#include <optional>
 
 #if defined(__GLIBC__)
 #include <malloc.h>
@@ -112,22 +113,27 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
 
   // The label array holds the stages' per-voxel scratch until the labelling writes the labels:
   // the texture codes (bytes [0, 2n)) through the division, with the texture's LBP codes in
-  // [2n, 3n) while it runs; then the own states ([0, n)) through the refinement, beside the
-  // refinement's bit masks. It is allocated (or recycled) once and paged in once; separate arrays
-  // cost more allocations, zero-fills and page-ins (docs/performance.md, "Fourth round"). Peak:
-  // the labels and the states (5 bytes per voxel); a recycled array does not add to it.
+  // [2n, 3n) while it runs; the voxels' own states in [3n, 4n) from the texture's first pass (or
+  // the creation) through the refinement, whose bit masks take [0, 3n) once the codes are
+  // counted. It is allocated (or recycled) once and paged in once; separate arrays cost more
+  // allocations, zero-fills and page-ins (docs/performance.md, "Fourth round"). Peak: the labels
+  // and the states (5 bytes per voxel); a recycled array does not add to it.
   const std::size_t n = grid.dims.count();
   detail::check_labels_fit(n);  // before any stage allocates: the labels could not hold the result
   std::vector<Block> blocks;
+  float own_lo = 0, own_hi = 0;
+  detail::float_bounds(params.free_below, params.occupied_above, own_lo, own_hi);
+  std::optional<detail::CellRows> rows;  // the map's rows as the texture read them, for the creation
   st.begin("texture");
   if (op && op->native_into) {
     resize_huge(r.labels, n);  // not zeroed (LabelArray): every stage writes before it reads
     // Fresh pages faulted in (and zeroed by the system) over the threads, not by whichever
     // stage first touches them; a recycled array's are in already and cost a write per page.
     touch_pages(r.labels.data(), n * sizeof(std::uint32_t), params.threads);
-    // codes in bytes [0, 2n), the operator's scratch (LBP codes) in [2n, 3n)
+    // codes in bytes [0, 2n), the operator's scratch (LBP codes) in [2n, 3n), own states in [3n, 4n)
     std::uint8_t* const bytes = reinterpret_cast<std::uint8_t*>(r.labels.data());
-    const int codes = op->native_into(grid, params, reinterpret_cast<std::uint16_t*>(bytes), bytes + 2 * n);
+    rows.emplace(grid, bytes + 3 * n, own_lo, own_hi);
+    const int codes = op->native_into(grid, params, reinterpret_cast<std::uint16_t*>(bytes), bytes + 2 * n, &*rows);
     st.begin("division");
     blocks = detail::divide_codes(grid, reinterpret_cast<const detail::code_t*>(r.labels.data()), codes, params,
                                   /*faces_only=*/true);
@@ -140,22 +146,23 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
     resize_huge(r.labels, n);
   }
   st.begin("creation");
-  std::uint8_t* const own = reinterpret_cast<std::uint8_t*>(r.labels.data());  // the voxels' own states
-  UninitVector<std::uint8_t> states = detail::create_segments_and_own_states(grid, blocks, params, own);
+  std::uint8_t* const scratch = reinterpret_cast<std::uint8_t*>(r.labels.data());
+  std::uint8_t* const own = scratch + 3 * n;  // the voxels' own states
+  UninitVector<std::uint8_t> states =
+      detail::create_segments_and_own_states(grid, blocks, params, own, rows ? &*rows : nullptr);
+  rows.reset();
   if (keep_stages) {
     r.blocks = blocks;
     r.created_states.assign(states.begin(), states.end());
   }
   st.begin("refinement");
-  // The rest of the label array (3 bytes per voxel, from an 8-byte boundary) takes the unknown
+  // The rest of the label array (3 bytes per voxel, before the own states) takes the unknown
   // growth's bit masks, then the rules': allocated apart, they raised the peak by 0.25 byte per
-  // voxel. (Tiny maps have no room past the own states: 1 voxel is 4 bytes, and the masks start
-  // at 8.)
-  const std::size_t skip = (n + 7) / 8 * 8, bytes = r.labels.size() * sizeof(std::uint32_t);
-  const std::size_t room = bytes > skip ? bytes - skip : 0;
-  detail::refine(states.data(), own, grid.dims, params, room ? own + skip : nullptr, room);
+  // voxel.
+  const std::size_t room = 3 * n;
+  detail::refine(states.data(), own, grid.dims, params, scratch, room);
   if (params.preset == Preset::default_preset)
-    detail::apply_voxel_rules(states.data(), own, grid.dims, params, room ? own + skip : nullptr, room);
+    detail::apply_voxel_rules(states.data(), own, grid.dims, params, scratch, room);
   release_freed_memory();
   st.begin("labelling");
   // The states go in: they are freed inside, before the segment statistics.

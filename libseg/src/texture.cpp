@@ -5,11 +5,13 @@
 #include <cstring>
 #include <immintrin.h>
 
+#include "occseg/create.hpp"
 #include "occseg/error.hpp"
 #include "occseg/parallel.hpp"
 #include "cpu_features.hpp"
 #include "codes_internal.hpp"
 #include "huge_pages.hpp"
+#include "own_states_internal.hpp"
 
 namespace occseg {
 
@@ -578,6 +580,7 @@ Stencil stencil(const Dims& d) {
 
 namespace detail {
 void set_texture_kernel(TextureKernel k) { g_texture_kernel.store(static_cast<int>(k), std::memory_order_relaxed); }
+TextureKernel texture_kernel() { return static_cast<TextureKernel>(g_texture_kernel.load(std::memory_order_relaxed)); }
 }  // namespace detail
 
 namespace {
@@ -598,7 +601,7 @@ TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads) {
 }
 
 void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threads, code_t* codes,
-                                  std::uint8_t* lbp_scratch) {
+                                  std::uint8_t* lbp_scratch, CellRows* rows) {
   check_contrast_bins(contrast_bins);
   const Dims& d = grid.dims;
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz;
@@ -628,7 +631,11 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
     for (std::size_t k = b; k < e; ++k) {
       std::uint64_t* h = part[k].data();
       std::vector<std::uint16_t> list(nx + 32);  // count_steps_avx*'s room
-      const std::size_t z0 = nz * k / t, z1 = nz * (k + 1) / t;
+      // With rows, the chunks start on multiples of kMeanCell: the planes of a cell on one thread.
+      const auto start = [&](std::size_t j) {
+        return j == static_cast<std::size_t>(t) ? nz : (rows ? nz * j / t / kMeanCell * kMeanCell : nz * j / t);
+      };
+      const std::size_t z0 = start(k), z1 = start(k + 1);
       bool ok = (z0 == 0 || plane_ok(z0 - 1)) && plane_ok(z0);
       for (std::size_t z = z0; ok && z < z1; ++z) {
         if (z + 1 < nz && !(ok = plane_ok(z + 1))) break;
@@ -641,6 +648,7 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
           if (!interior_row(d, y, z, x0, x1)) {
             std::fill(row, row + nx, kNoTexture);
             ok = !by_rows || probabilities_in_range(prow, nx);
+            if (rows) rows->add_row(y, z);
             continue;
           }
           std::fill(row, row + x0, kNoTexture);
@@ -672,6 +680,7 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
           else
 #endif
           count_steps(row + x0, x1 - x0, h);
+          if (rows) rows->add_row(y, z);
         }
       }
       if (!ok) bad_values.store(true, std::memory_order_relaxed);

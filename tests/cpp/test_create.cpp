@@ -7,6 +7,7 @@
 #include "occseg/create.hpp"
 #include "occseg/refine.hpp"
 #include "occseg/texture.hpp"
+#include "codes_internal.hpp"
 #include "own_states_internal.hpp"
 #include "random_maps.hpp"
 
@@ -152,13 +153,17 @@ TEST(Create, RowSumsAreMeanOccupancyBitForBit) {
       reordered_differs += mean_occupancy(swapped, b) != mean_occupancy(g, b);
     }
     ASSERT_GT(reordered_differs, blocks.size() / 3) << "map " << k << ": the values do not tell orders apart";
-    for (int threads : {1, 2, 3}) {
-      const std::vector<double> means = detail::block_means_by_rows(g, blocks, threads);
-      ASSERT_EQ(means.size(), blocks.size()) << "map " << k << ": the blocks do not tile it";
-      std::size_t wrong = 0;
-      for (std::size_t i = 0; i < blocks.size(); ++i) wrong += means[i] != mean_occupancy(g, blocks[i]);
-      EXPECT_EQ(wrong, 0u) << "map " << k << ", " << threads << " threads";
-    }
+    // Every row kernel the processor has (compiler, AVX2, AVX-512), on 1 to 3 threads.
+    for (int kernel = 0; kernel <= 2; ++kernel)
+      for (int threads : {1, 2, 3}) {
+        detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
+        const std::vector<double> means = detail::block_means_by_rows(g, blocks, threads);
+        detail::set_texture_kernel(detail::TextureKernel::fastest);
+        ASSERT_EQ(means.size(), blocks.size()) << "map " << k << ": the blocks do not tile it";
+        std::size_t wrong = 0;
+        for (std::size_t i = 0; i < blocks.size(); ++i) wrong += means[i] != mean_occupancy(g, blocks[i]);
+        EXPECT_EQ(wrong, 0u) << "map " << k << ", kernel " << kernel << ", " << threads << " threads";
+      }
   }
 }
 
@@ -184,5 +189,46 @@ TEST(Create, EveryVoxelGetsItsBlocksState) {
       }
       EXPECT_EQ(create_segments(g, blocks, p), expect) << "map " << k << (whole ? "" : ", a block missing");
     }
+  }
+}
+
+// segment() has the texture's first pass add the map's rows for the creation (own states and
+// cell sums) while it reads them: on any thread count the result must be creation's own, bit for
+// bit. Values that tell orders apart (as above: 1 at each cell's first voxel, then values of
+// 2^-53 whose sum depends on the order), map depths that are not multiples of the cells' 8 planes
+// (the texture's per-thread chunks must start on a cell), and a band that leaves all three own
+// states.
+TEST(Create, TextureFirstPassAddsTheRowsAsCreationDoes) {
+  const Dims dims[] = {{37, 29, 23}, {70, 9, 41}, {16, 16, 16}, {9, 3, 30}};
+  for (std::size_t k = 0; k < 4; ++k) {
+    Grid g(dims[k], 0.0f);
+    test::Rng r(90 + k);
+    const float half = std::ldexp(1.0f, -53);
+    const float values[6] = {half, half * (1.0f + std::ldexp(1.0f, -7)), half / 2, 0.0f, 0.5f, 0.9f};
+    for (float& v : g.p) v = values[r.below(6)];
+    for (std::uint32_t z = 0; z < g.dims.nz; z += 8)
+      for (std::uint32_t y = 0; y < g.dims.ny; y += 8)
+        for (std::uint32_t x = 0; x < g.dims.nx; x += 8) g.at(x, y, z) = 1.0f;
+    float lo = 0, hi = 0;
+    detail::float_bounds(Params().free_below, Params().occupied_above, lo, hi);
+    std::vector<std::uint8_t> want_own(g.p.size(), 0xEE);
+    detail::CellRows want(g, want_own.data(), lo, hi);
+    for (std::size_t z = 0; z < g.dims.nz; ++z)
+      for (std::size_t y = 0; y < g.dims.ny; ++y) want.add_row(y, z);
+    ASSERT_EQ(want_own, own_states(g, Params())) << "map " << k;
+    for (int kernel = 0; kernel <= 2; ++kernel)  // the texture's row kernels, and the cells' with them
+      for (int threads : {1, 2, 3, 5}) {
+        std::vector<std::uint8_t> own(g.p.size(), 0xEE), lbp(g.p.size());
+        std::vector<std::uint16_t> codes(g.p.size());
+        detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
+        detail::CellRows rows(g, own.data(), lo, hi);
+        detail::compute_texture_into(g, 8, threads, reinterpret_cast<detail::code_t*>(codes.data()), lbp.data(), &rows);
+        detail::set_texture_kernel(detail::TextureKernel::fastest);
+        EXPECT_EQ(own, want_own) << "map " << k << ", " << threads << " threads";
+        ASSERT_EQ(rows.sums().size(), want.sums().size());
+        std::size_t wrong = 0;
+        for (std::size_t i = 0; i < rows.sums().size(); ++i) wrong += rows.sums()[i] != want.sums()[i];
+        EXPECT_EQ(wrong, 0u) << "map " << k << ", " << threads << " threads";
+      }
   }
 }

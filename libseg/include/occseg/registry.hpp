@@ -19,6 +19,10 @@
 
 namespace occseg {
 
+namespace detail {
+class CellRows;  // creation's reading of the map, row by row (own_states_internal.hpp)
+}
+
 // Name of the plugin that owns the built-in stages and parameters.
 constexpr const char* kBuiltinPlugin = "builtin";
 
@@ -35,8 +39,11 @@ struct TextureOperator {
   // it may use meanwhile (or nullptr); returns the number of distinct codes. segment() keeps
   // both in the label array, which it allocates anyway (docs/performance.md). Its kNoTexture
   // codes must lie only on the map's outer faces (the division counts the blocks inside without
-  // testing for them).
-  int (*native_into)(const Grid& grid, const Params& params, std::uint16_t* codes, std::uint8_t* scratch) = nullptr;
+  // testing for them). With `rows` (else nullptr), it adds every row of the map to it as it reads
+  // them (CellRows::add_row, the rows of each kMeanCell planes on one thread), so that the
+  // creation need not read the map again.
+  int (*native_into)(const Grid& grid, const Params& params, std::uint16_t* codes, std::uint8_t* scratch,
+                     detail::CellRows* rows) = nullptr;
 };
 
 struct Similarity {

@@ -65,8 +65,10 @@ namespace detail {
 enum class TextureKernel { compiler = 0, avx2 = 1, avx512 = 2, fastest = 2 };
 // For tests and benchmarks: compute_texture uses the fastest kernel up to `k` that the processor
 // has (the compiler-vectorised one always; the hand-written AVX2 and AVX-512 ones where the
-// processor has them). Process-wide; `fastest` by default.
+// processor has them), and so do the creation's cell sums (which segment() has the texture's
+// first pass add). Process-wide; `fastest` by default.
 void set_texture_kernel(TextureKernel k);
+TextureKernel texture_kernel();  // the setting
 }  // namespace detail
 
 }  // namespace occseg
