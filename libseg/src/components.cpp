@@ -10,6 +10,7 @@
 #include "occseg/parallel.hpp"
 #include "huge_pages.hpp"
 #include "segment_internal.hpp"
+#include "thread_scratch.hpp"
 
 #ifdef __SSE2__
 #include <emmintrin.h>
@@ -205,7 +206,8 @@ inline double run_sum(const float* v, std::size_t n) {
 // lies in one component), as its union-find parent, then as its slab-local component number.
 // Filling every voxel's entry in the first two passes moved 200 MB more on a 320 x 320 x 128 map.
 void label_states(const std::uint8_t* s, const std::function<void()>& release, const Grid& g,
-                  LabelArray& labels, std::vector<Segment>& segments, int threads, bool occupied26) {
+                  LabelArray& labels, std::vector<Segment>& segments, int threads, bool occupied26,
+                  std::vector<std::uint8_t>& starts) {
   const std::size_t n = g.dims.count();
   detail::check_labels_fit(n);
   const std::size_t nx = g.dims.nx, ny = g.dims.ny, nz = g.dims.nz, sz = nx * ny;
@@ -213,7 +215,7 @@ void label_states(const std::uint8_t* s, const std::function<void()>& release, c
   resize_huge(labels, n);
   std::uint32_t* lab = labels.data();
   const float* p = g.p.data();
-  std::vector<std::uint8_t> starts(n / 8 + 9, 0);  // run starts, for the statistics pass
+  starts.assign(n / 8 + 9, 0);  // run starts, for the statistics pass (storage kept if large enough)
 
   // 1. Each slab on its own: runs along x, united with the runs they touch in the rows before
   // them in y and z (inside the slab), then numbered 0..m-1 by first voxel.
@@ -338,7 +340,7 @@ void label_states(const std::uint8_t* s, const std::function<void()>& release, c
     segments[k].state = static_cast<State>(state_of[k]);
     segments[k].bbox_min.fill(std::numeric_limits<std::uint32_t>::max());
   }
-  auto merge = [&](const std::vector<SlotStats>& slab) {
+  auto merge = [&](const detail::ThreadScratch<SlotStats>& slab) {
     for (const SlotStats& t : slab) {
       Segment& seg = segments[t.id];
       seg.voxels += t.voxels;
@@ -356,7 +358,7 @@ void label_states(const std::uint8_t* s, const std::function<void()>& release, c
   // order, into one slot per segment present in the slab. Finished slabs are added to the table
   // in slab order as soon as all slabs before them are (whoever finishes one merges what is
   // ready), so only the few slabs waiting for an earlier one keep their slots.
-  std::vector<std::vector<SlotStats>> slots(slabs);
+  std::vector<detail::ThreadScratch<SlotStats>> slots(slabs);
   std::vector<std::uint8_t> finished(slabs, 0);
   std::size_t merged = 0;
   std::mutex merge_mutex;
@@ -368,7 +370,7 @@ void label_states(const std::uint8_t* s, const std::function<void()>& release, c
     std::vector<std::uint32_t> uniq(ids, ids + local);
     std::sort(uniq.begin(), uniq.end());
     uniq.erase(std::unique(uniq.begin(), uniq.end()), uniq.end());
-    std::vector<SlotStats>& out = slots[sl];
+    detail::ThreadScratch<SlotStats>& out = slots[sl];
     out.resize(uniq.size());
     for (std::size_t k = 0; k < uniq.size(); ++k) {
       out[k].id = uniq[k];
@@ -407,7 +409,7 @@ void label_states(const std::uint8_t* s, const std::function<void()>& release, c
     finished[sl] = 1;
     for (; merged < slabs && finished[merged]; ++merged) {
       merge(slots[merged]);
-      slots[merged] = std::vector<SlotStats>();
+      slots[merged] = detail::ThreadScratch<SlotStats>();
     }
   });
 
@@ -431,17 +433,28 @@ void detail::check_labels_fit(std::size_t voxels) {
 
 void label_components(const std::vector<std::uint8_t>& states, const Grid& grid, LabelArray& labels,
                       std::vector<Segment>& segments, int threads, bool occupied26) {
-  label_states(states.data(), nullptr, grid, labels, segments, threads, occupied26);
+  std::vector<std::uint8_t> starts;
+  label_states(states.data(), nullptr, grid, labels, segments, threads, occupied26, starts);
 }
 
 void label_components(std::vector<std::uint8_t>&& states, const Grid& grid, LabelArray& labels,
                       std::vector<Segment>& segments, int threads, bool occupied26) {
-  label_states(states.data(), [&] { states = std::vector<std::uint8_t>(); }, grid, labels, segments, threads, occupied26);
+  std::vector<std::uint8_t> starts;
+  label_states(states.data(), [&] { states = std::vector<std::uint8_t>(); }, grid, labels, segments, threads, occupied26,
+               starts);
 }
 
 void label_components(UninitVector<std::uint8_t>&& states, const Grid& grid, LabelArray& labels,
                       std::vector<Segment>& segments, int threads, bool occupied26) {
-  label_states(states.data(), [&] { states = UninitVector<std::uint8_t>(); }, grid, labels, segments, threads, occupied26);
+  std::vector<std::uint8_t> starts;
+  detail::label_components(std::move(states), grid, labels, segments, threads, occupied26, starts);
+}
+
+void detail::label_components(UninitVector<std::uint8_t>&& states, const Grid& grid, LabelArray& labels,
+                              std::vector<Segment>& segments, int threads, bool occupied26,
+                              std::vector<std::uint8_t>& run_starts) {
+  label_states(states.data(), [&] { states = UninitVector<std::uint8_t>(); }, grid, labels, segments, threads,
+               occupied26, run_starts);
 }
 
 }  // namespace occseg

@@ -54,6 +54,7 @@ struct Context::Pool {
   std::exception_ptr first;
   std::mutex spare_mutex;
   LabelArray spare_labels;  // from recycle(), for the next segment()
+  Workspace spare_workspace;  // from the last segment()
 
   void work(std::size_t k) {
     std::uint64_t seen = 0;
@@ -161,12 +162,16 @@ void run_on_pool(Context* context, std::size_t n, int threads,
 
 Result segment(Context& context, const Grid& grid, const Params& params, bool keep_stages) {
   LabelArray labels;
+  Workspace workspace;
   {
     std::lock_guard<std::mutex> lock(context.pool_->spare_mutex);
     labels.swap(context.pool_->spare_labels);
+    workspace.run_starts.swap(context.pool_->spare_workspace.run_starts);
   }
   Result r;
-  context.run([&] { r = segment_into(grid, params, keep_stages, std::move(labels)); });
+  context.run([&] { r = segment_into(grid, params, keep_stages, std::move(labels), &workspace); });
+  std::lock_guard<std::mutex> lock(context.pool_->spare_mutex);
+  context.pool_->spare_workspace.run_starts.swap(workspace.run_starts);  // a concurrent call's, if any, is freed
   return r;
 }
 

@@ -15,6 +15,7 @@
 #include "occseg/parallel.hpp"
 #include "occseg/registry.hpp"
 #include "codes_internal.hpp"
+#include "thread_scratch.hpp"
 
 namespace occseg {
 
@@ -53,8 +54,8 @@ void count_rows(const detail::code_t* codes, const Dims& dims, const Block& b, s
   // such a row is mostly one code with a few others, and one histogram chained the increments
   // of that code (each waiting for the previous store). The two extra histograms live per thread
   // and are added and cleared only when a row used them.
-  thread_local std::vector<std::uint32_t> extra;
-  if (extra.size() < 2 * bins) extra.assign(2 * bins, 0u);
+  thread_local detail::ThreadScratch<std::uint32_t> extra;
+  if (extra.size() < 2 * bins) extra.resize(2 * bins, 0u);
   std::uint32_t* const h1 = extra.data();
   std::uint32_t* const h2 = h1 + bins;
   bool used = false;

@@ -97,7 +97,8 @@ Result segment(const Grid& grid, const Params& params, bool keep_stages) {
   return segment_into(grid, params, keep_stages, LabelArray());
 }
 
-Result segment_into(const Grid& grid, const Params& params, bool keep_stages, LabelArray&& labels) {
+Result segment_into(const Grid& grid, const Params& params, bool keep_stages, LabelArray&& labels,
+                    Workspace* workspace) {
   params.validate();
   // The built-in texture operator checks the values itself (compute_texture); plugins get a
   // checked map.
@@ -166,8 +167,9 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   release_freed_memory();
   st.begin("labelling");
   // The states go in: they are freed inside, before the segment statistics.
-  label_components(std::move(states), grid, r.labels, r.segments, params.threads,
-                   params.occupied_connectivity == 26);
+  Workspace local;
+  detail::label_components(std::move(states), grid, r.labels, r.segments, params.threads,
+                           params.occupied_connectivity == 26, (workspace ? workspace : &local)->run_starts);
   // Part of "labelling" for callers: it decides which connected regions are separate objects.
   if (params.preset == Preset::default_preset && params.support_plane > 0)
     split_support_planes(grid, r.labels, r.segments, static_cast<std::size_t>(params.support_plane),

@@ -7,10 +7,18 @@
 
 namespace occseg {
 
+// Storage a context keeps from one segment() to the next besides the label array (whose pages
+// are then in already): the labelling's run-start bits.
+struct Workspace {
+  std::vector<std::uint8_t> run_starts;
+};
+
 // segment(grid, params, keep_stages), writing the labels into `labels`' storage: when it holds
 // at least as many elements as the map has voxels, no fresh memory is allocated or paged in for
-// them (every label is written). The result is the same as segment()'s.
-Result segment_into(const Grid& grid, const Params& params, bool keep_stages, LabelArray&& labels);
+// them (every label is written). Scratch goes to `workspace` when given. The result is the same
+// as segment()'s.
+Result segment_into(const Grid& grid, const Params& params, bool keep_stages, LabelArray&& labels,
+                    Workspace* workspace = nullptr);
 
 namespace detail {
 // Throws Error(unsupported) when a map of `voxels` voxels cannot have uint32 labels (2^32 - 1 or

@@ -12,6 +12,7 @@
 #include "codes_internal.hpp"
 #include "huge_pages.hpp"
 #include "own_states_internal.hpp"
+#include "thread_scratch.hpp"
 
 namespace occseg {
 
@@ -611,7 +612,7 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
   // distribution of non-zero contrasts (per-chunk histograms summed in chunk order: integer counts,
   // so the total is exact for any thread count).
   const int t = std::max(1, std::min<int>(resolve_threads(threads), static_cast<int>(nz)));
-  std::vector<std::vector<std::uint64_t>> part(t, std::vector<std::uint64_t>(4 * kStepStride, 0));
+  std::vector<detail::ThreadScratch<std::uint64_t>> part(t, detail::ThreadScratch<std::uint64_t>(4 * kStepStride, 0));
   // The input check rides along, so the map is read once for both, and the codes of a bad map
   // are never used: the pass stops and the first bad voxel is named. With the hand-written
   // kernels each row checks its own values (the interior ones in the kernel, as it loads them):
@@ -630,7 +631,7 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
   parallel_for(static_cast<std::size_t>(t), t, [&](std::size_t b, std::size_t e) {
     for (std::size_t k = b; k < e; ++k) {
       std::uint64_t* h = part[k].data();
-      std::vector<std::uint16_t> list(nx + 32);  // count_steps_avx*'s room
+      detail::ThreadScratch<std::uint16_t> list(nx + 32);  // count_steps_avx*'s room
       // With rows, the chunks start on multiples of kMeanCell: the planes of a cell on one thread.
       const auto start = [&](std::size_t j) {
         return j == static_cast<std::size_t>(t) ? nz : (rows ? nz * j / t / kMeanCell * kMeanCell : nz * j / t);
@@ -706,8 +707,8 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
   const bool fused = by_compares && sten.present == 63 && use_avx2_kernel();
 #endif
   parallel_for(nz, threads, [&](std::size_t z0, std::size_t z1) {
-    std::vector<std::uint8_t> lbp(nx);
-    std::vector<std::uint16_t> lvl(nx);
+    detail::ThreadScratch<std::uint8_t> lbp(nx);
+    detail::ThreadScratch<std::uint16_t> lvl(nx);
     for (std::size_t z = z0; z < z1; ++z)
       for (std::size_t y = 0; y < ny; ++y) {
         if (lbp_scratch) {  // the LBP codes are there: no map reads

@@ -289,3 +289,26 @@ TEST(Components, RunsEndingTogetherAcrossASlabBoundaryJoinOnlyWhatTouches) {
     EXPECT_EQ(segs.size(), occ26 ? 5u : 6u);
   }
 }
+
+// A context hands the labelling the run-start bits of its last call: stale bits (all set here)
+// and stale labels (all 0) must change nothing, and the storage must be the one handed in.
+TEST(Components, ReusedRunStartStorageIsClearedFirst) {
+  const Dims d{41, 13, 19};
+  Grid g(d, 0.5f);
+  std::vector<std::uint8_t> st(d.count());
+  std::uint32_t r = 5;
+  for (std::size_t i = 0; i < st.size(); ++i) st[i] = static_cast<std::uint8_t>((r = r * 1664525u + 1013904223u) >> 30) % 3;
+  LabelArray want;
+  std::vector<Segment> want_segs;
+  label_components(st, g, want, want_segs, 2, true);
+  ASSERT_GT(want_segs.size(), 10u);
+  std::vector<std::uint8_t> run_starts(d.count() / 8 + 9, 0xFF);
+  const std::uint8_t* storage = run_starts.data();
+  LabelArray got(d.count(), 0u);
+  std::vector<Segment> got_segs;
+  detail::label_components(UninitVector<std::uint8_t>(st.begin(), st.end()), g, got, got_segs, 2, true, run_starts);
+  EXPECT_TRUE(std::equal(got.begin(), got.end(), want.begin(), want.end()));
+  ASSERT_EQ(got_segs.size(), want_segs.size());
+  for (std::size_t k = 0; k < want_segs.size(); ++k) EXPECT_EQ(got_segs[k].voxels, want_segs[k].voxels) << k;
+  EXPECT_EQ(run_starts.data(), storage);
+}
