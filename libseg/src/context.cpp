@@ -166,12 +166,12 @@ Result segment(Context& context, const Grid& grid, const Params& params, bool ke
   {
     std::lock_guard<std::mutex> lock(context.pool_->spare_mutex);
     labels.swap(context.pool_->spare_labels);
-    workspace.run_starts.swap(context.pool_->spare_workspace.run_starts);
+    std::swap(workspace, context.pool_->spare_workspace);
   }
   Result r;
   context.run([&] { r = segment_into(grid, params, keep_stages, std::move(labels), &workspace); });
   std::lock_guard<std::mutex> lock(context.pool_->spare_mutex);
-  context.pool_->spare_workspace.run_starts.swap(workspace.run_starts);  // a concurrent call's, if any, is freed
+  std::swap(context.pool_->spare_workspace, workspace);  // a concurrent call's, if any, is freed
   return r;
 }
 

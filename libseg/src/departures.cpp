@@ -242,16 +242,21 @@ namespace {
 // is made from it only when asked for: allocating, zero-filling and writing 13 MB of bytes, and
 // reading them back, cost more than the opening itself.
 BitMask region_bits(const std::uint8_t* own, const Dims& d, const Params& params, std::uint8_t* scratch = nullptr,
-                    std::size_t scratch_bytes = 0) {
+                    std::size_t scratch_bytes = 0, const std::uint64_t* unknown_bits = nullptr) {
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, rows = ny * nz, bytes = BitMask::bytes(nx, rows);
   const int r = params.gap_radius;
   // Three masks in the scratch when it holds them (not for very narrow maps: a word per row).
   const bool fits = scratch && 3 * bytes <= scratch_bytes;
   BitMask a(nx, rows, fits ? scratch : nullptr), b(nx, r > 0 ? rows : 0, fits ? scratch + bytes : nullptr),
       c(nx, r > 0 ? rows : 0, fits ? scratch + 2 * bytes : nullptr);
+  // The 0.5 bits from the texture's pass (CellRows) when there are, else packed from own here.
+  const BitMask half(nx, unknown_bits ? rows : 0, const_cast<std::uint64_t*>(unknown_bits));
   if (r <= 0) {  // no opening: every 0.5 voxel is in a region
     parallel_for_dynamic(rows, params.threads, [&](std::size_t r0, std::size_t r1) {
-      for (std::size_t rw = r0; rw < r1; ++rw) pack_half(own + rw * nx, nx, a.row(rw));
+      for (std::size_t rw = r0; rw < r1; ++rw) {
+        if (unknown_bits) std::copy(half.row(rw), half.row(rw) + a.W, a.row(rw));
+        else pack_half(own + rw * nx, nx, a.row(rw));
+      }
     });
     return a;
   }
@@ -263,8 +268,12 @@ BitMask region_bits(const std::uint8_t* own, const Dims& d, const Params& params
   //   per plane: dilate z b -> c.
   parallel_for_dynamic(nz, params.threads, [&](std::size_t z0, std::size_t z1) {
     for (std::size_t z = z0; z < z1; ++z) {
-      for (std::size_t y = 0; y < ny; ++y) pack_half(own + (y + ny * z) * nx, nx, a.row(y + ny * z));
-      box_x(a, b, ny * z, ny * (z + 1), r, true);
+      if (unknown_bits) {
+        box_x(half, b, ny * z, ny * (z + 1), r, true);
+      } else {
+        for (std::size_t y = 0; y < ny; ++y) pack_half(own + (y + ny * z) * nx, nx, a.row(y + ny * z));
+        box_x(a, b, ny * z, ny * (z + 1), r, true);
+      }
       for (std::size_t y = 0; y < ny; ++y) box_line(b, a, ny * z, 1, ny, y, r, true);
     }
   });
@@ -331,8 +340,9 @@ void flood_gaps_from_objects(std::uint8_t* st, const std::uint8_t* own,
 }  // namespace
 
 void detail::apply_voxel_rules(std::uint8_t* st, const std::uint8_t* own, const Dims& d,
-                               const Params& params, std::uint8_t* scratch, std::size_t scratch_bytes) {
-  const BitMask region = region_bits(own, d, params, scratch, scratch_bytes);
+                               const Params& params, std::uint8_t* scratch, std::size_t scratch_bytes,
+                               const std::uint64_t* unknown_bits) {
+  const BitMask region = region_bits(own, d, params, scratch, scratch_bytes, unknown_bits);
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, sz = nx * ny;
   const std::vector<std::uint8_t> none(nx, kFree);  // outside the map: no occupied neighbour
   // Reads only own states and each voxel's own entry of st, so rows are independent. Rows that

@@ -41,7 +41,9 @@ inline void own_states_of(const float* p, std::size_t n, float lo, float hi, std
   for (; i < n; ++i) out[i] = static_cast<std::uint8_t>(p[i] < lo ? 0 : (p[i] > hi ? 2 : 1));
 }
 
-// Creation's reading of the map, row by row: each voxel's own state (into `own`, when given) and
+// Creation's reading of the map, row by row: each voxel's own state (into `own`, when given; with
+// `unknown_bits` too, own state unknown as a bit per voxel, a row of ceil(nx / 64) words per row
+// of voxels, bits past nx 0: the refinement's growth and opening start from it) and
 // the sum of each kMeanCell^3 cell of the lattice anchored at voxel 0 (the far faces cut the last
 // ones), its rows added in scan order, each row's voxels in x order: the order of
 // mean_occupancy(). segment() has the texture's first pass do it while each row is in the cache
@@ -50,7 +52,7 @@ inline void own_states_of(const float* p, std::size_t n, float lo, float hi, std
 // by one thread, in scan order.
 class CellRows {
  public:
-  CellRows(const Grid& grid, std::uint8_t* own, float lo, float hi);
+  CellRows(const Grid& grid, std::uint8_t* own, float lo, float hi, std::uint64_t* unknown_bits = nullptr);
   void add_row(std::size_t y, std::size_t z);
   const std::vector<double>& sums() const { return sum_; }  // cell (x, y, z) at x + ncx * (y + ncy * z)
   std::size_t cells_x() const { return ncx_; }
@@ -59,6 +61,7 @@ class CellRows {
  private:
   const Grid* grid_;
   std::uint8_t* own_;
+  std::uint64_t* unknown_;
   float lo_, hi_;
   std::size_t ncx_, ncy_;
   bool avx2_, avx512_;
@@ -87,15 +90,19 @@ void refine_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& d
 void refine_boundaries(std::uint8_t* states, const std::uint8_t* own, const Dims& dims,
                        const Params& params);
 // The unknown growth of refine_unknown() on bit masks (unknown_growth.cpp), kept in `scratch`
-// (8-byte aligned) when it has grow_unknown_scratch_bytes(), else in an array of its own.
+// (8-byte aligned) when it has grow_unknown_scratch_bytes(), else in an array of its own. With
+// `unknown_bits` (CellRows' bits of `own`), own is not read.
 std::size_t grow_unknown_scratch_bytes(const Dims& dims);
 void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& dims, int threads,
-                  std::uint8_t* scratch, std::size_t scratch_bytes);
+                  std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits = nullptr);
 
 // refine_unknown() then refine_boundaries(), the masks of the first in `scratch` if it has room.
+// `unknown_bits` as in grow_unknown(), or nullptr.
 void refine(std::uint8_t* states, const std::uint8_t* own, const Dims& dims, const Params& params,
-            std::uint8_t* scratch, std::size_t scratch_bytes);
+            std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits = nullptr);
+// With `unknown_bits` (as in grow_unknown()), the opening starts from them instead of `own`.
 void apply_voxel_rules(std::uint8_t* states, const std::uint8_t* own, const Dims& dims,
-                       const Params& params, std::uint8_t* scratch, std::size_t scratch_bytes);
+                       const Params& params, std::uint8_t* scratch, std::size_t scratch_bytes,
+                       const std::uint64_t* unknown_bits = nullptr);
 
 }  // namespace occseg::detail

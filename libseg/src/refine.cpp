@@ -331,8 +331,8 @@ void detail::refine_boundaries(std::uint8_t* st, const std::uint8_t* own, const 
 }
 
 void detail::refine(std::uint8_t* st, const std::uint8_t* own, const Dims& d, const Params& params,
-                    std::uint8_t* scratch, std::size_t scratch_bytes) {
-  grow_unknown(st, own, d, params.threads, scratch, scratch_bytes);
+                    std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits) {
+  grow_unknown(st, own, d, params.threads, scratch, scratch_bytes, unknown_bits);
   detail::refine_boundaries(st, own, d, params);
 }
 

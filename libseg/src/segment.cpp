@@ -125,6 +125,9 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   float own_lo = 0, own_hi = 0;
   detail::float_bounds(params.free_below, params.occupied_above, own_lo, own_hi);
   std::optional<detail::CellRows> rows;  // the map's rows as the texture read them, for the creation
+  Workspace local;
+  Workspace& ws = workspace ? *workspace : local;
+  const std::uint64_t* unknown_bits = nullptr;  // own states' unknown voxels, when the texture's pass wrote them
   st.begin("texture");
   if (op && op->native_into) {
     resize_huge(r.labels, n);  // not zeroed (LabelArray): every stage writes before it reads
@@ -133,7 +136,9 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
     touch_pages(r.labels.data(), n * sizeof(std::uint32_t), params.threads);
     // codes in bytes [0, 2n), the operator's scratch (LBP codes) in [2n, 3n), own states in [3n, 4n)
     std::uint8_t* const bytes = reinterpret_cast<std::uint8_t*>(r.labels.data());
-    rows.emplace(grid, bytes + 3 * n, own_lo, own_hi);
+    ws.unknown_bits.resize(grid.dims.ny * grid.dims.nz * ((grid.dims.nx + 63) / 64));  // every word is written
+    rows.emplace(grid, bytes + 3 * n, own_lo, own_hi, ws.unknown_bits.data());
+    unknown_bits = ws.unknown_bits.data();
     const int codes = op->native_into(grid, params, reinterpret_cast<std::uint16_t*>(bytes), bytes + 2 * n, &*rows);
     st.begin("division");
     blocks = detail::divide_codes(grid, reinterpret_cast<const detail::code_t*>(r.labels.data()), codes, params,
@@ -161,15 +166,15 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   // growth's bit masks, then the rules': allocated apart, they raised the peak by 0.25 byte per
   // voxel.
   const std::size_t room = 3 * n;
-  detail::refine(states.data(), own, grid.dims, params, scratch, room);
+  detail::refine(states.data(), own, grid.dims, params, scratch, room, unknown_bits);
   if (params.preset == Preset::default_preset)
-    detail::apply_voxel_rules(states.data(), own, grid.dims, params, scratch, room);
+    detail::apply_voxel_rules(states.data(), own, grid.dims, params, scratch, room, unknown_bits);
+  if (!workspace) local.unknown_bits = std::vector<std::uint64_t>();  // not at the labelling's peak
   release_freed_memory();
   st.begin("labelling");
   // The states go in: they are freed inside, before the segment statistics.
-  Workspace local;
   detail::label_components(std::move(states), grid, r.labels, r.segments, params.threads,
-                           params.occupied_connectivity == 26, (workspace ? workspace : &local)->run_starts);
+                           params.occupied_connectivity == 26, ws.run_starts);
   // Part of "labelling" for callers: it decides which connected regions are separate objects.
   if (params.preset == Preset::default_preset && params.support_plane > 0)
     split_support_planes(grid, r.labels, r.segments, static_cast<std::size_t>(params.support_plane),

@@ -8,9 +8,11 @@
 namespace occseg {
 
 // Storage a context keeps from one segment() to the next besides the label array (whose pages
-// are then in already): the labelling's run-start bits.
+// are then in already): the labelling's run-start bits and the own states' unknown voxels as bits
+// (1/8 byte per voxel each).
 struct Workspace {
   std::vector<std::uint8_t> run_starts;
+  std::vector<std::uint64_t> unknown_bits;
 };
 
 // segment(grid, params, keep_stages), writing the labels into `labels`' storage: when it holds

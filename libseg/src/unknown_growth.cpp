@@ -73,6 +73,50 @@ __attribute__((target("avx2"))) void pack_row_avx2(const std::uint8_t* st, const
 }
 #endif
 
+// W and C of one row from the states and the bits of the own states' unknown voxels (u): C is
+// "free" and u. (bits past nx stay 0: u's are 0.)
+void pack_row_bits(const std::uint8_t* st, const word_t* u, std::size_t nx, word_t* w, word_t* c) {
+  const std::size_t words = (nx + 63) / 64;
+  std::fill(w, w + words, 0);
+  std::fill(c, c + words, 0);
+  std::size_t x = 0;
+#ifdef __SSE2__
+  const __m128i unknown = _mm_set1_epi8(static_cast<char>(kUnknown)), free = _mm_set1_epi8(static_cast<char>(kFree));
+  for (; x + 16 <= nx; x += 16) {
+    const __m128i s = _mm_loadu_si128(reinterpret_cast<const __m128i*>(st + x));
+    set_bits16(w, x, _mm_cmpeq_epi8(s, unknown));
+    set_bits16(c, x, _mm_cmpeq_epi8(s, free));
+  }
+#endif
+  for (; x < nx; ++x) {
+    w[x / 64] |= static_cast<std::uint64_t>(st[x] == kUnknown) << (x % 64);
+    c[x / 64] |= static_cast<std::uint64_t>(st[x] == kFree) << (x % 64);
+  }
+  for (std::size_t i = 0; i < words; ++i) c[i] &= u[i];
+}
+
+#ifdef OCCSEG_GROWTH_AVX2
+// pack_row_bits() 32 voxels per step.
+__attribute__((target("avx2"))) void pack_row_bits_avx2(const std::uint8_t* st, const word_t* u, std::size_t nx,
+                                                        word_t* w, word_t* c) {
+  const std::size_t words = (nx + 63) / 64;
+  std::fill(w, w + words, 0);
+  std::fill(c, c + words, 0);
+  const __m256i unknown = _mm256_set1_epi8(static_cast<char>(kUnknown)), free = _mm256_set1_epi8(static_cast<char>(kFree));
+  std::size_t x = 0;
+  for (; x + 32 <= nx; x += 32) {
+    const __m256i s = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(st + x));
+    set_bits32(w, x, _mm256_cmpeq_epi8(s, unknown));
+    set_bits32(c, x, _mm256_cmpeq_epi8(s, free));
+  }
+  for (; x < nx; ++x) {
+    w[x / 64] |= static_cast<std::uint64_t>(st[x] == kUnknown) << (x % 64);
+    c[x / 64] |= static_cast<std::uint64_t>(st[x] == kFree) << (x % 64);
+  }
+  for (std::size_t i = 0; i < words; ++i) c[i] &= u[i];
+}
+#endif
+
 // st[x] = unknown where bit x of w is set (a grown candidate, or a voxel unknown already).
 void unpack_row(const word_t* w, std::size_t nx, std::uint8_t* st) {
   std::size_t x = 0;
@@ -152,7 +196,8 @@ std::size_t grow_unknown_scratch_bytes(const Dims& d) {
 }
 
 void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& d, int threads,
-                  std::uint8_t* scratch, std::size_t scratch_bytes) {
+                  std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits) {
+  const word_t* const ubits = reinterpret_cast<const word_t*>(unknown_bits);
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, rows = ny * nz, words = (nx + 63) / 64;
   std::vector<std::uint64_t> own_words;
   word_t* masks;
@@ -178,11 +223,19 @@ void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& d, 
       const std::size_t r0 = ny * z;
       for (std::size_t y = 0; y < ny; ++y) {
         const std::size_t r = r0 + y;
+        if (ubits) {  // the own states' unknown voxels as bits already: own is not read
 #ifdef OCCSEG_GROWTH_AVX2
-        if (avx2) pack_row_avx2(st + nx * r, own + nx * r, nx, row_w(r), row_c(r));
-        else
+          if (avx2) pack_row_bits_avx2(st + nx * r, ubits + words * r, nx, row_w(r), row_c(r));
+          else
 #endif
-          pack_row(st + nx * r, own + nx * r, nx, row_w(r), row_c(r));
+            pack_row_bits(st + nx * r, ubits + words * r, nx, row_w(r), row_c(r));
+        } else {
+#ifdef OCCSEG_GROWTH_AVX2
+          if (avx2) pack_row_avx2(st + nx * r, own + nx * r, nx, row_w(r), row_c(r));
+          else
+#endif
+            pack_row(st + nx * r, own + nx * r, nx, row_w(r), row_c(r));
+        }
         bool g = grow_up(row_w(r), row_c(r), words);
         g = grow_down(row_w(r), row_c(r), words) || g;
         grew[r] = g;

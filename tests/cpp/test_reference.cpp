@@ -34,6 +34,27 @@ void expect_same_segments(const std::vector<Segment>& a, const std::vector<Segme
   }
 }
 
+// The own states' unknown voxels as bits, as segment() has the texture's pass write them
+// (detail::CellRows); every row kernel the processor has must give the same bits.
+std::vector<std::uint64_t> unknown_bits(const Grid& g) {
+  const Dims& d = g.dims;
+  std::vector<std::uint64_t> first;
+  for (int kernel = 2; kernel >= 0; --kernel) {
+    std::vector<std::uint64_t> bits(d.ny * d.nz * ((d.nx + 63) / 64), ~std::uint64_t(0));
+    std::vector<std::uint8_t> own(d.count());
+    float lo = 0, hi = 0;
+    detail::float_bounds(Params().free_below, Params().occupied_above, lo, hi);
+    detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
+    detail::CellRows rows(g, own.data(), lo, hi, bits.data());
+    detail::set_texture_kernel(detail::TextureKernel::fastest);
+    for (std::size_t z = 0; z < d.nz; ++z)
+      for (std::size_t y = 0; y < d.ny; ++y) rows.add_row(y, z);
+    if (first.empty()) first = bits;
+    EXPECT_EQ(bits, first) << "kernel " << kernel;
+  }
+  return first;
+}
+
 bool same_blocks(const std::vector<Block>& a, const std::vector<Block>& b) {
   if (a.size() != b.size()) return false;
   for (std::size_t i = 0; i < a.size(); ++i)
@@ -210,6 +231,10 @@ TEST(Reference, UnknownGrowthMatchesOnRandomStates) {
         detail::grow_unknown(got.data(), own.data(), d, threads, reinterpret_cast<std::uint8_t*>(scratch.data()),
                              scratch.size() * 8);
         EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " in scratch";
+        got = st;  // from the unknown bits segment() has, not reading `own`
+        const std::vector<std::uint8_t> no_own(own.size(), 0xEE);
+        detail::grow_unknown(got.data(), no_own.data(), d, threads, nullptr, 0, unknown_bits(g).data());
+        EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " from bits";
       }
     }
 }
@@ -246,6 +271,15 @@ TEST(Reference, VoxelRulesMatchOnRandomStates) {
           detail::apply_voxel_rules(got.data(), own.data(), d, p, nullptr, 0);
           EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " vector " << vector_rows
                                << " threads " << threads;
+          got = st;  // the opening from the unknown bits segment() has
+          detail::apply_voxel_rules(got.data(), own.data(), d, p, nullptr, 0, unknown_bits(g).data());
+          EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " from bits";
+          p.gap_radius = 0;  // no opening: the regions are the bits themselves
+          std::vector<std::uint8_t> plain = st;
+          got = st;
+          detail::apply_voxel_rules(plain.data(), own.data(), d, p, nullptr, 0);
+          detail::apply_voxel_rules(got.data(), own.data(), d, p, nullptr, 0, unknown_bits(g).data());
+          EXPECT_EQ(got, plain) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " radius 0 from bits";
         }
       }
       detail::set_vector_rules(true);
