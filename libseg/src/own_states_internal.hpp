@@ -93,8 +93,11 @@ void refine_boundaries(std::uint8_t* states, const std::uint8_t* own, const Dims
 // (8-byte aligned) when it has grow_unknown_scratch_bytes(), else in an array of its own. With
 // `unknown_bits` (CellRows' bits of `own`), own is not read.
 std::size_t grow_unknown_scratch_bytes(const Dims& dims);
+// With `occupied_rows` (one byte per row of voxels), row r's byte says whether it holds an
+// occupied voxel.
 void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& dims, int threads,
-                  std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits = nullptr);
+                  std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits = nullptr,
+                  std::uint8_t* occupied_rows = nullptr);
 
 // refine_unknown() then refine_boundaries(), the masks of the first in `scratch` if it has room.
 // `unknown_bits` as in grow_unknown(), or nullptr.

@@ -221,13 +221,15 @@ struct Sweep {
 // whole y sweep would. The default call's six sweeps (two passes x y z) read the map four times
 // instead of six (docs/performance.md, "Fifth round").
 void run_sweeps(std::uint8_t* states, const std::uint8_t* own, const Dims& d, int threads, int look,
-                const std::vector<Sweep>& sweeps) {
+                const std::vector<Sweep>& sweeps, std::uint8_t* occupied_rows = nullptr) {
   std::uint8_t* const st = states;
-  // Per row of voxels (row r: y = r % ny, z = r / ny): may hold an occupied voxel. Set from the
-  // states with the first group of sweeps and kept by the windows that write occupied voxels; x
-  // rows are written only where they held one already.
-  std::vector<std::uint8_t> occ(d.ny * d.nz, 0);
-  bool occ_ready = false;
+  // Per row of voxels (row r: y = r % ny, z = r / ny): may hold an occupied voxel. Handed in
+  // (`occupied_rows`, found by the unknown growth as it packed the rows), or set from the states
+  // with the first group of sweeps; kept by the windows that write occupied voxels; x rows are
+  // written only where they held one already.
+  std::vector<std::uint8_t> own_flags(occupied_rows ? 0 : d.ny * d.nz, 0);
+  std::uint8_t* const occ = occupied_rows ? occupied_rows : own_flags.data();
+  bool occ_ready = occupied_rows != nullptr;
   const auto row = [&](std::size_t first, int step) {
     if (occ[first / d.nx]) boundary_row(st + first, own + first, d.nx, step, look);
   };
@@ -235,9 +237,9 @@ void run_sweeps(std::uint8_t* states, const std::uint8_t* own, const Dims& d, in
     const Plane pl = plane_shape(d, s.axis);
     const std::size_t base = plane_base(d, s.axis, o);
     if (s.axis == 1)  // rows y of plane z = o
-      boundary_plane(st + base, own + base, d.nx, pl, step, look, lane, occ.data() + d.ny * o, 1);
+      boundary_plane(st + base, own + base, d.nx, pl, step, look, lane, occ + d.ny * o, 1);
     else  // rows z of slice y = o
-      boundary_plane(st + base, own + base, d.nx, pl, step, look, lane, occ.data() + o,
+      boundary_plane(st + base, own + base, d.nx, pl, step, look, lane, occ + o,
                      static_cast<std::ptrdiff_t>(d.ny));
   };
   for (std::size_t g = 0; g < sweeps.size();) {
@@ -332,8 +334,11 @@ void detail::refine_boundaries(std::uint8_t* st, const std::uint8_t* own, const 
 
 void detail::refine(std::uint8_t* st, const std::uint8_t* own, const Dims& d, const Params& params,
                     std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits) {
-  grow_unknown(st, own, d, params.threads, scratch, scratch_bytes, unknown_bits);
-  detail::refine_boundaries(st, own, d, params);
+  // The growth reads every row anyway: it flags those with an occupied voxel for the sweeps (it
+  // never makes or unmakes one), which then need not read the map once more (0.4 ms).
+  std::vector<std::uint8_t> occupied_rows(d.ny * d.nz);
+  grow_unknown(st, own, d, params.threads, scratch, scratch_bytes, unknown_bits, occupied_rows.data());
+  run_sweeps(st, own, d, params.threads, lookahead_of(params), boundary_sweeps(params), occupied_rows.data());
 }
 
 void refine_boundaries(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,

@@ -26,6 +26,7 @@ namespace {
 
 constexpr std::uint8_t kFree = static_cast<std::uint8_t>(State::free);
 constexpr std::uint8_t kUnknown = static_cast<std::uint8_t>(State::unknown);
+constexpr std::uint8_t kOccupied = static_cast<std::uint8_t>(State::occupied);
 
 // W and C of voxels x .. nx - 1 of a row (x a multiple of 16) into cleared words.
 void pack_rest(const std::uint8_t* st, const std::uint8_t* own, std::size_t x, std::size_t nx, word_t* w,
@@ -117,6 +118,14 @@ __attribute__((target("avx2"))) void pack_row_bits_avx2(const std::uint8_t* st, 
 }
 #endif
 
+// Some occupied voxel among s[0, n).
+__attribute__((target_clones("avx2", "default")))
+bool any_occupied(const std::uint8_t* s, std::size_t n) {
+  std::uint8_t any = 0;
+  for (std::size_t x = 0; x < n; ++x) any |= static_cast<std::uint8_t>(s[x] == kOccupied);
+  return any != 0;
+}
+
 // st[x] = unknown where bit x of w is set (a grown candidate, or a voxel unknown already).
 void unpack_row(const word_t* w, std::size_t nx, std::uint8_t* st) {
   std::size_t x = 0;
@@ -196,7 +205,8 @@ std::size_t grow_unknown_scratch_bytes(const Dims& d) {
 }
 
 void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& d, int threads,
-                  std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits) {
+                  std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits,
+                  std::uint8_t* occupied_rows) {
   const word_t* const ubits = reinterpret_cast<const word_t*>(unknown_bits);
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, rows = ny * nz, words = (nx + 63) / 64;
   std::vector<std::uint64_t> own_words;
@@ -236,6 +246,7 @@ void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& d, 
 #endif
             pack_row(st + nx * r, own + nx * r, nx, row_w(r), row_c(r));
         }
+        if (occupied_rows) occupied_rows[r] = any_occupied(st + nx * r, nx);  // in L1 now
         bool g = grow_up(row_w(r), row_c(r), words);
         g = grow_down(row_w(r), row_c(r), words) || g;
         grew[r] = g;
