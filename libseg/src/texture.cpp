@@ -609,9 +609,17 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
   const Stencil sten = stencil(d);
   const float* p = grid.p.data();
   // Pass 1: fine contrast step + 1 of every interior voxel, parked in the code array, and the
-  // distribution of non-zero contrasts (per-chunk histograms summed in chunk order: integer counts,
-  // so the total is exact for any thread count).
-  const int t = std::max(1, std::min<int>(resolve_threads(threads), static_cast<int>(nz)));
+  // distribution of non-zero contrasts (per-thread histograms summed in thread order: integer
+  // counts, so the total is exact whoever counted what). Threads take groups of planes from a
+  // shared counter: fixed halves left one thread waiting 0.6-0.8 ms for the other on the scene.
+  // A group is 1 to 4 cells deep (kMeanCell planes each, so that a cell's planes stay on one
+  // thread: CellRows), at least two groups per thread where the map is deep enough (groups of 8
+  // planes, interleaving the threads more, were slower than 32 on the scene: 16.0 against 15.2 ms).
+  const std::size_t cells_z = (nz + kMeanCell - 1) / kMeanCell;
+  const int wanted = resolve_threads(threads);
+  const std::size_t G = kMeanCell * std::clamp<std::size_t>(cells_z / (2 * static_cast<std::size_t>(wanted)), 1, 4);
+  const std::size_t groups = (nz + G - 1) / G;
+  const int t = std::max(1, std::min<int>(wanted, static_cast<int>(groups)));
   std::vector<detail::ThreadScratch<std::uint64_t>> part(t, detail::ThreadScratch<std::uint64_t>(4 * kStepStride, 0));
   // The input check rides along, so the map is read once for both, and the codes of a bad map
   // are never used: the pass stops and the first bad voxel is named. With the hand-written
@@ -628,15 +636,10 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
 #endif
   const std::size_t plane = nx * ny;
   auto plane_ok = [&](std::size_t z) { return by_rows || probabilities_in_range(p + plane * z, plane); };
-  parallel_for(static_cast<std::size_t>(t), t, [&](std::size_t b, std::size_t e) {
-    for (std::size_t k = b; k < e; ++k) {
-      std::uint64_t* h = part[k].data();
-      detail::ThreadScratch<std::uint16_t> list(nx + 32);  // count_steps_avx*'s room
-      // With rows, the chunks start on multiples of kMeanCell: the planes of a cell on one thread.
-      const auto start = [&](std::size_t j) {
-        return j == static_cast<std::size_t>(t) ? nz : (rows ? nz * j / t / kMeanCell * kMeanCell : nz * j / t);
-      };
-      const std::size_t z0 = start(k), z1 = start(k + 1);
+  std::atomic<std::size_t> next_group{0};
+  // Planes [z0, z1) into the histograms h; false when a value outside [0, 1] was seen. A function
+  // of its own: inlined into the loop over groups below, GCC 12 compiled it 20 % slower.
+  const auto planes = [&](std::size_t z0, std::size_t z1, std::uint64_t* h, std::uint16_t* list_data) __attribute__((noinline)) {
       bool ok = (z0 == 0 || plane_ok(z0 - 1)) && plane_ok(z0);
       for (std::size_t z = z0; ok && z < z1; ++z) {
         if (z + 1 < nz && !(ok = plane_ok(z + 1))) break;
@@ -676,15 +679,25 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
               if (row[x] == kRecheck) row[x] = exact_step(prow + x, sten.off, sten.present);
           }
 #ifdef OCCSEG_TEXTURE_AVX2
-          if (use_avx512_kernel() && cpu_has_avx512vbmi2()) count_steps_avx512(row + x0, x1 - x0, h, list.data());
-          else if (use_avx2_kernel()) count_steps_avx2(row + x0, x1 - x0, h, list.data());
+          if (use_avx512_kernel() && cpu_has_avx512vbmi2()) count_steps_avx512(row + x0, x1 - x0, h, list_data);
+          else if (use_avx2_kernel()) count_steps_avx2(row + x0, x1 - x0, h, list_data);
           else
 #endif
           count_steps(row + x0, x1 - x0, h);
           if (rows) rows->add_row(y, z);
         }
       }
-      if (!ok) bad_values.store(true, std::memory_order_relaxed);
+      return ok;
+  };
+  parallel_for(static_cast<std::size_t>(t), t, [&](std::size_t b, std::size_t e) {
+    for (std::size_t k = b; k < e; ++k) {
+      std::uint64_t* h = part[k].data();
+      detail::ThreadScratch<std::uint16_t> list(nx + 32);  // count_steps_avx*'s room
+      for (std::size_t gi; (gi = next_group.fetch_add(1, std::memory_order_relaxed)) < groups;) {
+        if (bad_values.load(std::memory_order_relaxed)) break;  // the map is rejected anyway
+        const std::size_t z0 = gi * G;
+        if (!planes(z0, std::min(nz, z0 + G), h, list.data())) bad_values.store(true, std::memory_order_relaxed);
+      }
     }
   });
   if (bad_values.load()) check_probabilities(grid);  // throws, naming the first bad voxel
