@@ -289,37 +289,41 @@ TEST(Reference, VoxelRulesMatchOnRandomStates) {
 
 // The labelling on random states against the reference union-find: maps of many 8-plane slabs
 // (their first planes are joined on several threads at once), runs of 1 to 40 voxels of one
-// state, 6- and 26-connectivity, 1 to 4 threads. Labels and the whole segment table must match.
+// state (slabs labelled with a table of their runs) and of 1 to 6 (slabs labelled through the
+// label array), 6- and 26-connectivity, 1 to 4 threads. Labels and the whole segment table must
+// match.
 TEST(Reference, LabellingMatchesOnRandomStatesAcrossManySlabs) {
   const Dims dims[] = {{41, 29, 70}, {70, 3, 129}, {5, 60, 41}, {130, 17, 33}};
   std::uint64_t seed = 7;
-  for (const Dims& d : dims) {
-    test::Rng r(seed++);
-    Grid g(d, 0.5f);
-    std::vector<std::uint8_t> st(d.count());
-    for (std::size_t i = 0; i < st.size();) {
-      const std::size_t run = 1 + static_cast<std::size_t>(r.uniform() * 40);
-      const double v = r.uniform();
-      const auto s = static_cast<std::uint8_t>(v < 0.4 ? 0 : (v < 0.7 ? 1 : 2));
-      for (std::size_t k = 0; k < run && i < st.size(); ++k, ++i) st[i] = s;
-    }
-    // A run of its own in the last voxel: its start bit lies in the last, partly used byte of the
-    // run-start bits (none of these voxel counts is a multiple of 8).
-    st.back() = static_cast<std::uint8_t>((st[st.size() - 2] + 1) % 3);
-    for (std::size_t i = 0; i < g.p.size(); ++i) g.p[i] = static_cast<float>(r.uniform());
-    for (bool occupied26 : {false, true}) {
-      LabelArray want;
-      std::vector<Segment> want_segs;
-      reference::label(st, g, want, want_segs, occupied26);
-      for (int threads : {1, 2, 3, 4}) {
-        LabelArray got;
-        std::vector<Segment> got_segs;
-        label_components(st, g, got, got_segs, threads, occupied26);
-        const std::string what = std::to_string(d.nx) + "x" + std::to_string(d.ny) + "x" + std::to_string(d.nz) +
-                                 (occupied26 ? " 26" : " 6") + " threads " + std::to_string(threads);
-        EXPECT_TRUE(std::equal(got.begin(), got.end(), want.begin(), want.end())) << what;
-        expect_same_segments(got_segs, want_segs, what);
+  for (const Dims& d : dims)
+    for (double longest : {40.0, 6.0}) {
+      test::Rng r(seed++);
+      Grid g(d, 0.5f);
+      std::vector<std::uint8_t> st(d.count());
+      for (std::size_t i = 0; i < st.size();) {
+        const std::size_t run = 1 + static_cast<std::size_t>(r.uniform() * longest);
+        const double v = r.uniform();
+        const auto s = static_cast<std::uint8_t>(v < 0.4 ? 0 : (v < 0.7 ? 1 : 2));
+        for (std::size_t k = 0; k < run && i < st.size(); ++k, ++i) st[i] = s;
+      }
+      // A run of its own in the last voxel: its start bit lies in the last, partly used byte of the
+      // run-start bits (none of these voxel counts is a multiple of 8).
+      st.back() = static_cast<std::uint8_t>((st[st.size() - 2] + 1) % 3);
+      for (std::size_t i = 0; i < g.p.size(); ++i) g.p[i] = static_cast<float>(r.uniform());
+      for (bool occupied26 : {false, true}) {
+        LabelArray want;
+        std::vector<Segment> want_segs;
+        reference::label(st, g, want, want_segs, occupied26);
+        for (int threads : {1, 2, 3, 4}) {
+          LabelArray got;
+          std::vector<Segment> got_segs;
+          label_components(st, g, got, got_segs, threads, occupied26);
+          const std::string what = std::to_string(d.nx) + "x" + std::to_string(d.ny) + "x" + std::to_string(d.nz) +
+                                   (occupied26 ? " 26" : " 6") + " threads " + std::to_string(threads) + " runs up to " +
+                                   std::to_string(static_cast<int>(longest));
+          EXPECT_TRUE(std::equal(got.begin(), got.end(), want.begin(), want.end())) << what;
+          expect_same_segments(got_segs, want_segs, what);
+        }
       }
     }
-  }
 }
