@@ -17,7 +17,11 @@
 
 namespace occseg {
 
+using detail::pack_equal;
 using detail::word_t;
+#if defined(__x86_64__) && defined(__GNUC__)
+using detail::pack_equal_avx2;
+#endif
 
 double mean_occupancy(const Grid& grid, const Block& b) {
   // Cell by cell (kMeanCell^3 cells anchored at voxel 0), each cell's part in scan order.
@@ -109,16 +113,6 @@ __attribute__((target("avx512f"))) void add_cells_avx512(const float* v, double*
 }
 #pragma GCC diagnostic pop
 
-// Bit x of u: own[x] is unknown, 32 voxels per step (unknown_bits_of() takes the rest).
-__attribute__((target("avx2"))) void unknown_bits_avx2(const std::uint8_t* own, std::size_t nx, word_t* u) {
-  std::fill(u, u + (nx + 63) / 64, 0);
-  const __m256i unknown = _mm256_set1_epi8(static_cast<char>(State::unknown));
-  std::size_t x = 0;
-  for (; x + 32 <= nx; x += 32)
-    detail::set_bits32(u, x, _mm256_cmpeq_epi8(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(own + x)), unknown));
-  for (; x < nx; ++x) u[x / 64] |= static_cast<std::uint64_t>(own[x] == static_cast<std::uint8_t>(State::unknown)) << (x % 64);
-}
-
 // detail::own_states_of() for 32 voxels per step (the scalar one takes the rest).
 __attribute__((target("avx2"))) void own_states_avx2(const float* p, std::size_t n, float lo, float hi,
                                                      std::uint8_t* out) {
@@ -139,13 +133,6 @@ __attribute__((target("avx2"))) void own_states_avx2(const float* p, std::size_t
   detail::own_states_of(p + i, n - i, lo, hi, out + i);
 }
 #endif
-
-// Bit x of u: own[x] is unknown (bits past nx 0).
-void unknown_bits_of(const std::uint8_t* own, std::size_t nx, word_t* u) {
-  std::fill(u, u + (nx + 63) / 64, 0);
-  for (std::size_t x = 0; x < nx; ++x)
-    u[x / 64] |= static_cast<std::uint64_t>(own[x] == static_cast<std::uint8_t>(State::unknown)) << (x % 64);
-}
 
 }  // namespace
 
@@ -168,11 +155,12 @@ void detail::CellRows::add_row(std::size_t y, std::size_t z) {
       own_states_of(row, nx, lo_, hi_, own_ + i0);
     if (unknown_) {
       word_t* const u = reinterpret_cast<word_t*>(unknown_) + (nx + 63) / 64 * (y + grid_->dims.ny * z);
+      const auto unknown = static_cast<std::uint8_t>(State::unknown);
 #ifdef OCCSEG_CREATE_AVX2
-      if (avx2_) unknown_bits_avx2(own_ + i0, nx, u);
+      if (avx2_) pack_equal_avx2(own_ + i0, nx, unknown, u);
       else
 #endif
-        unknown_bits_of(own_ + i0, nx, u);
+        pack_equal(own_ + i0, nx, unknown, u);
     }
   }
   double* const sums = sum_.data() + ncx_ * (y / c + ncy_ * (z / c));

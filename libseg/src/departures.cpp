@@ -108,19 +108,6 @@ void box_line(const BitMask& in, BitMask& out, std::size_t first, std::size_t st
   }
 }
 
-// Bits of one row: own[x] at 0.5. SSE2 (every x86-64) 16 voxels at a time.
-void pack_half(const std::uint8_t* own, std::size_t nx, word_t* bits) {
-  const std::size_t W = (nx + 63) / 64;
-  std::fill(bits, bits + W, 0);
-  std::size_t x = 0;
-#ifdef __SSE2__
-  const __m128i half = _mm_set1_epi8(static_cast<char>(kUnknown));
-  for (; x + 16 <= nx; x += 16)
-    detail::set_bits16(bits, x, _mm_cmpeq_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(own + x)), half));
-#endif
-  for (; x < nx; ++x) bits[x / 64] |= static_cast<std::uint64_t>(own[x] == kUnknown) << (x % 64);
-}
-
 // out[x] = bit x of the row, and own[x] at 0.5 (the opening only shrinks the 0.5 mask; kept
 // anyway).
 void unpack_half(const word_t* bits, const std::uint8_t* own, std::size_t nx, std::uint8_t* out) {
@@ -255,7 +242,7 @@ BitMask region_bits(const std::uint8_t* own, const Dims& d, const Params& params
     parallel_for_dynamic(rows, params.threads, [&](std::size_t r0, std::size_t r1) {
       for (std::size_t rw = r0; rw < r1; ++rw) {
         if (unknown_bits) std::copy(half.row(rw), half.row(rw) + a.W, a.row(rw));
-        else pack_half(own + rw * nx, nx, a.row(rw));
+        else detail::pack_equal(own + rw * nx, nx, kUnknown, a.row(rw));
       }
     });
     return a;
@@ -271,7 +258,7 @@ BitMask region_bits(const std::uint8_t* own, const Dims& d, const Params& params
       if (unknown_bits) {
         box_x(half, b, ny * z, ny * (z + 1), r, true);
       } else {
-        for (std::size_t y = 0; y < ny; ++y) pack_half(own + (y + ny * z) * nx, nx, a.row(y + ny * z));
+        for (std::size_t y = 0; y < ny; ++y) detail::pack_equal(own + (y + ny * z) * nx, nx, kUnknown, a.row(y + ny * z));
         box_x(a, b, ny * z, ny * (z + 1), r, true);
       }
       for (std::size_t y = 0; y < ny; ++y) box_line(b, a, ny * z, 1, ny, y, r, true);

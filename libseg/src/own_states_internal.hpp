@@ -16,6 +16,9 @@
 
 namespace occseg::detail {
 
+// Some occupied voxel among states s[0, n) (refine.cpp).
+bool any_occupied(const std::uint8_t* s, std::size_t n);
+
 // Float thresholds equivalent to the double ones: for every float p,
 // double(p) < below  <=>  p < lo   and   double(p) > above  <=>  p > hi.
 void float_bounds(double below, double above, float& lo, float& hi);

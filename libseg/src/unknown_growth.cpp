@@ -19,6 +19,7 @@
 #include "bit_rows_internal.hpp"
 #include "cpu_features.hpp"
 #include "own_states_internal.hpp"
+#include "thread_scratch.hpp"
 
 namespace occseg::detail {
 
@@ -26,52 +27,9 @@ namespace {
 
 constexpr std::uint8_t kFree = static_cast<std::uint8_t>(State::free);
 constexpr std::uint8_t kUnknown = static_cast<std::uint8_t>(State::unknown);
-constexpr std::uint8_t kOccupied = static_cast<std::uint8_t>(State::occupied);
-
-// W and C of voxels x .. nx - 1 of a row (x a multiple of 16) into cleared words.
-void pack_rest(const std::uint8_t* st, const std::uint8_t* own, std::size_t x, std::size_t nx, word_t* w,
-               word_t* c) {
-#ifdef __SSE2__
-  const __m128i unknown = _mm_set1_epi8(static_cast<char>(kUnknown)), free = _mm_set1_epi8(static_cast<char>(kFree));
-  for (; x + 16 <= nx; x += 16) {
-    const __m128i s = _mm_loadu_si128(reinterpret_cast<const __m128i*>(st + x));
-    const __m128i o = _mm_loadu_si128(reinterpret_cast<const __m128i*>(own + x));
-    set_bits16(w, x, _mm_cmpeq_epi8(s, unknown));
-    set_bits16(c, x, _mm_and_si128(_mm_cmpeq_epi8(s, free), _mm_cmpeq_epi8(o, unknown)));
-  }
-#endif
-  for (; x < nx; ++x) {
-    w[x / 64] |= static_cast<std::uint64_t>(st[x] == kUnknown) << (x % 64);
-    c[x / 64] |= static_cast<std::uint64_t>(st[x] == kFree && own[x] == kUnknown) << (x % 64);
-  }
-}
-
-// W and C of one row of voxels (bits past nx stay 0).
-void pack_row(const std::uint8_t* st, const std::uint8_t* own, std::size_t nx, word_t* w, word_t* c) {
-  const std::size_t words = (nx + 63) / 64;
-  std::fill(w, w + words, 0);
-  std::fill(c, c + words, 0);
-  pack_rest(st, own, 0, nx, w, c);
-}
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #define OCCSEG_GROWTH_AVX2 1
-// pack_row() 32 voxels per step (their bits lie in one word); pack_rest() takes the rest.
-__attribute__((target("avx2"))) void pack_row_avx2(const std::uint8_t* st, const std::uint8_t* own, std::size_t nx,
-                                                   word_t* w, word_t* c) {
-  const std::size_t words = (nx + 63) / 64;
-  std::fill(w, w + words, 0);
-  std::fill(c, c + words, 0);
-  const __m256i unknown = _mm256_set1_epi8(static_cast<char>(kUnknown)), free = _mm256_set1_epi8(static_cast<char>(kFree));
-  std::size_t x = 0;
-  for (; x + 32 <= nx; x += 32) {
-    const __m256i s = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(st + x));
-    const __m256i o = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(own + x));
-    set_bits32(w, x, _mm256_cmpeq_epi8(s, unknown));
-    set_bits32(c, x, _mm256_and_si256(_mm256_cmpeq_epi8(s, free), _mm256_cmpeq_epi8(o, unknown)));
-  }
-  pack_rest(st, own, x, nx, w, c);
-}
 #endif
 
 // W and C of one row from the states and the bits of the own states' unknown voxels (u): C is
@@ -97,7 +55,8 @@ void pack_row_bits(const std::uint8_t* st, const word_t* u, std::size_t nx, word
 }
 
 #ifdef OCCSEG_GROWTH_AVX2
-// pack_row_bits() 32 voxels per step.
+// pack_row_bits() 32 voxels per step (self-contained: a call into the baseline SSE2 code from
+// here made the growth twice as slow).
 __attribute__((target("avx2"))) void pack_row_bits_avx2(const std::uint8_t* st, const word_t* u, std::size_t nx,
                                                         word_t* w, word_t* c) {
   const std::size_t words = (nx + 63) / 64;
@@ -117,14 +76,6 @@ __attribute__((target("avx2"))) void pack_row_bits_avx2(const std::uint8_t* st, 
   for (std::size_t i = 0; i < words; ++i) c[i] &= u[i];
 }
 #endif
-
-// Some occupied voxel among s[0, n).
-__attribute__((target_clones("avx2", "default")))
-bool any_occupied(const std::uint8_t* s, std::size_t n) {
-  std::uint8_t any = 0;
-  for (std::size_t x = 0; x < n; ++x) any |= static_cast<std::uint8_t>(s[x] == kOccupied);
-  return any != 0;
-}
 
 // st[x] = unknown where bit x of w is set (a grown candidate, or a voxel unknown already).
 void unpack_row(const word_t* w, std::size_t nx, std::uint8_t* st) {
@@ -229,23 +180,20 @@ void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& d, 
   const bool avx2 = cpu_has_avx2();
 #endif
   parallel_for_dynamic(nz, threads, [&](std::size_t z0, std::size_t z1) {
+    ThreadScratch<std::uint64_t> own_words(ubits ? 0 : words);
+    word_t* const own_u = reinterpret_cast<word_t*>(own_words.data());
     for (std::size_t z = z0; z < z1; ++z) {
       const std::size_t r0 = ny * z;
       for (std::size_t y = 0; y < ny; ++y) {
         const std::size_t r = r0 + y;
-        if (ubits) {  // the own states' unknown voxels as bits already: own is not read
+        // The own states' unknown voxels as bits: handed in (own is not read), or packed here.
+        const word_t* u = ubits ? ubits + words * r : own_u;
+        if (!ubits) pack_equal(own + nx * r, nx, kUnknown, own_u);
 #ifdef OCCSEG_GROWTH_AVX2
-          if (avx2) pack_row_bits_avx2(st + nx * r, ubits + words * r, nx, row_w(r), row_c(r));
-          else
+        if (avx2) pack_row_bits_avx2(st + nx * r, u, nx, row_w(r), row_c(r));
+        else
 #endif
-            pack_row_bits(st + nx * r, ubits + words * r, nx, row_w(r), row_c(r));
-        } else {
-#ifdef OCCSEG_GROWTH_AVX2
-          if (avx2) pack_row_avx2(st + nx * r, own + nx * r, nx, row_w(r), row_c(r));
-          else
-#endif
-            pack_row(st + nx * r, own + nx * r, nx, row_w(r), row_c(r));
-        }
+          pack_row_bits(st + nx * r, u, nx, row_w(r), row_c(r));
         if (occupied_rows) occupied_rows[r] = any_occupied(st + nx * r, nx);  // in L1 now
         bool g = grow_up(row_w(r), row_c(r), words);
         g = grow_down(row_w(r), row_c(r), words) || g;
