@@ -137,10 +137,16 @@ __attribute__((target("avx2"))) void own_states_avx2(const float* p, std::size_t
 }  // namespace
 
 detail::CellRows::CellRows(const Grid& grid, std::uint8_t* own, float lo, float hi, std::uint64_t* unknown_bits)
-    : grid_(&grid), own_(own), unknown_(own ? unknown_bits : nullptr), lo_(lo), hi_(hi), ncx_((grid.dims.nx + kMeanCell - 1) / kMeanCell),
+    : grid_(&grid),
+      own_(own),
+      unknown_(own ? unknown_bits : nullptr),
+      lo_(lo),
+      hi_(hi),
+      ncx_((grid.dims.nx + kMeanCell - 1) / kMeanCell),
       ncy_((grid.dims.ny + kMeanCell - 1) / kMeanCell),
       avx2_(cpu_has_avx2() && texture_kernel() >= TextureKernel::avx2),
-      avx512_(cpu_has_avx512() && texture_kernel() >= TextureKernel::avx512), sum_(ncx_ * ncy_ * ((grid.dims.nz + kMeanCell - 1) / kMeanCell), 0.0) {}
+      avx512_(cpu_has_avx512() && texture_kernel() >= TextureKernel::avx512),
+      sum_(ncx_ * ncy_ * ((grid.dims.nz + kMeanCell - 1) / kMeanCell), 0.0) {}
 
 void detail::CellRows::add_row(std::size_t y, std::size_t z) {
   constexpr std::size_t c = kMeanCell;

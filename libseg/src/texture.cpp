@@ -639,55 +639,56 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
   std::atomic<std::size_t> next_group{0};
   // Planes [z0, z1) into the histograms h; false when a value outside [0, 1] was seen. A function
   // of its own: inlined into the loop over groups below, GCC 12 compiled it 20 % slower.
-  const auto planes = [&](std::size_t z0, std::size_t z1, std::uint64_t* h, std::uint16_t* list_data) __attribute__((noinline)) {
-      bool ok = (z0 == 0 || plane_ok(z0 - 1)) && plane_ok(z0);
-      for (std::size_t z = z0; ok && z < z1; ++z) {
-        if (z + 1 < nz && !(ok = plane_ok(z + 1))) break;
-        for (std::size_t y = 0; ok && y < ny; ++y) {
-          // Plane z + 2 is fetched from memory into L2 while plane z is computed.
-          if (z + 2 < nz) prefetch_row(p + nx * (y + ny * (z + 2)), nx * sizeof(float));
-          detail::code_t* row = codes + nx * (y + ny * z);
-          const float* const prow = p + nx * (y + ny * z);
-          std::size_t x0 = 0, x1 = 0;
-          if (!interior_row(d, y, z, x0, x1)) {
-            std::fill(row, row + nx, kNoTexture);
-            ok = !by_rows || probabilities_in_range(prow, nx);
-            if (rows) rows->add_row(y, z);
-            continue;
-          }
-          std::fill(row, row + x0, kNoTexture);
-          std::fill(row + x1, row + nx, kNoTexture);
-          ok = !by_rows || (probabilities_in_range(prow, x0) && probabilities_in_range(prow + x1, nx - x1));
-          const float* prow0 = prow + x0;
-          // With scratch, the LBP codes now, from the contrast kernel's own comparisons: pass 2
-          // then reads 3 bytes per voxel instead of the map's rows again.
-          std::uint8_t* lrow = lbp_scratch ? lbp_scratch + nx * (y + ny * z) + x0 : nullptr;
-          bool rechecks = true;  // unless the kernel says there are none
-#ifdef OCCSEG_TEXTURE_AVX2
-          if (sten.present == 63 && use_avx512_kernel()) {
-            ok = contrast_row_avx512(prow0, sten.off, x1 - x0, row + x0, lrow, rechecks) && ok;
-          } else if (sten.present == 63 && use_avx2_kernel()) {
-            ok = contrast_row_avx2(prow0, sten.off, x1 - x0, row + x0, lrow, rechecks) && ok;
-          } else
-#endif
-          {
-            contrast_any<0>(prow0, sten.off, x1 - x0, row + x0, sten.present);
-            if (lrow) lbp_any<0>(prow0, sten.off, x1 - x0, lrow, sten.present);
-          }
-          if (rechecks && any_recheck(row + x0, x1 - x0)) {
-            for (std::size_t x = x0; x < x1; ++x)
-              if (row[x] == kRecheck) row[x] = exact_step(prow + x, sten.off, sten.present);
-          }
-#ifdef OCCSEG_TEXTURE_AVX2
-          if (use_avx512_kernel() && cpu_has_avx512vbmi2()) count_steps_avx512(row + x0, x1 - x0, h, list_data);
-          else if (use_avx2_kernel()) count_steps_avx2(row + x0, x1 - x0, h, list_data);
-          else
-#endif
-          count_steps(row + x0, x1 - x0, h);
+  const auto planes = [&](std::size_t z0, std::size_t z1, std::uint64_t* h,
+                          std::uint16_t* list_data) __attribute__((noinline)) {
+    bool ok = (z0 == 0 || plane_ok(z0 - 1)) && plane_ok(z0);
+    for (std::size_t z = z0; ok && z < z1; ++z) {
+      if (z + 1 < nz && !(ok = plane_ok(z + 1))) break;
+      for (std::size_t y = 0; ok && y < ny; ++y) {
+        // Plane z + 2 is fetched from memory into L2 while plane z is computed.
+        if (z + 2 < nz) prefetch_row(p + nx * (y + ny * (z + 2)), nx * sizeof(float));
+        detail::code_t* row = codes + nx * (y + ny * z);
+        const float* const prow = p + nx * (y + ny * z);
+        std::size_t x0 = 0, x1 = 0;
+        if (!interior_row(d, y, z, x0, x1)) {
+          std::fill(row, row + nx, kNoTexture);
+          ok = !by_rows || probabilities_in_range(prow, nx);
           if (rows) rows->add_row(y, z);
+          continue;
         }
+        std::fill(row, row + x0, kNoTexture);
+        std::fill(row + x1, row + nx, kNoTexture);
+        ok = !by_rows || (probabilities_in_range(prow, x0) && probabilities_in_range(prow + x1, nx - x1));
+        const float* prow0 = prow + x0;
+        // With scratch, the LBP codes now, from the contrast kernel's own comparisons: pass 2
+        // then reads 3 bytes per voxel instead of the map's rows again.
+        std::uint8_t* lrow = lbp_scratch ? lbp_scratch + nx * (y + ny * z) + x0 : nullptr;
+        bool rechecks = true;  // unless the kernel says there are none
+#ifdef OCCSEG_TEXTURE_AVX2
+        if (sten.present == 63 && use_avx512_kernel()) {
+          ok = contrast_row_avx512(prow0, sten.off, x1 - x0, row + x0, lrow, rechecks) && ok;
+        } else if (sten.present == 63 && use_avx2_kernel()) {
+          ok = contrast_row_avx2(prow0, sten.off, x1 - x0, row + x0, lrow, rechecks) && ok;
+        } else
+#endif
+        {
+          contrast_any<0>(prow0, sten.off, x1 - x0, row + x0, sten.present);
+          if (lrow) lbp_any<0>(prow0, sten.off, x1 - x0, lrow, sten.present);
+        }
+        if (rechecks && any_recheck(row + x0, x1 - x0)) {
+          for (std::size_t x = x0; x < x1; ++x)
+            if (row[x] == kRecheck) row[x] = exact_step(prow + x, sten.off, sten.present);
+        }
+#ifdef OCCSEG_TEXTURE_AVX2
+        if (use_avx512_kernel() && cpu_has_avx512vbmi2()) count_steps_avx512(row + x0, x1 - x0, h, list_data);
+        else if (use_avx2_kernel()) count_steps_avx2(row + x0, x1 - x0, h, list_data);
+        else
+#endif
+        count_steps(row + x0, x1 - x0, h);
+        if (rows) rows->add_row(y, z);
       }
-      return ok;
+    }
+    return ok;
   };
   parallel_for(static_cast<std::size_t>(t), t, [&](std::size_t b, std::size_t e) {
     for (std::size_t k = b; k < e; ++k) {
