@@ -194,6 +194,14 @@ void boundary_plane(std::uint8_t* st, const std::uint8_t* own, std::size_t nx, P
   }
 }
 
+// Some occupied voxel among s[0, n).
+__attribute__((target_clones("avx2", "default")))
+bool any_occupied_row(const std::uint8_t* s, std::size_t n) {
+  std::uint8_t any = 0;
+  for (std::size_t x = 0; x < n; ++x) any |= static_cast<std::uint8_t>(s[x] == kOccupied);
+  return any != 0;
+}
+
 // One refinement step: the forward and the backward scan of every line along `axis` for
 // free/occupied boundaries, with windows of `look` voxels. (The unknown growth runs on bit masks:
 // unknown_growth.cpp.)
@@ -255,7 +263,7 @@ void run_sweeps(std::uint8_t* states, const std::uint8_t* own, const Dims& d, in
         if (flag_rows)
           for (std::size_t r = 0; r < rows; ++r) {
             const std::size_t i = first + r * stride;
-            occ[i / d.nx] = detail::any_occupied(st + i, d.nx);
+            occ[i / d.nx] = any_occupied_row(st + i, d.nx);
           }
         for (std::size_t k = g; k < e; ++k) {
           const Sweep& s = sweeps[k];
@@ -287,12 +295,9 @@ int lookahead_of(const Params& params) { return std::clamp(params.lookahead, 1, 
 
 }  // namespace
 
-__attribute__((target_clones("avx2", "default")))
-bool detail::any_occupied(const std::uint8_t* s, std::size_t n) {
-  std::uint8_t any = 0;
-  for (std::size_t x = 0; x < n; ++x) any |= static_cast<std::uint8_t>(s[x] == kOccupied);
-  return any != 0;
-}
+// (A plain function calling the multiversioned one: Clang refuses to make a function declared
+// earlier without target_clones multiversioned.)
+bool detail::any_occupied(const std::uint8_t* s, std::size_t n) { return any_occupied_row(s, n); }
 
 void detail::float_bounds(double below, double above, float& lo, float& hi) {
   lo = static_cast<float>(below);
