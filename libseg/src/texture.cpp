@@ -11,6 +11,7 @@
 #include "cpu_features.hpp"
 #include "codes_internal.hpp"
 #include "huge_pages.hpp"
+#include "lane_pack_internal.hpp"
 #include "own_states_internal.hpp"
 #include "thread_scratch.hpp"
 
@@ -434,24 +435,6 @@ inline void count_list(const std::uint16_t* list, std::size_t len, std::uint64_t
 }
 
 #ifdef OCCSEG_TEXTURE_AVX2
-// pshufb controls that move the 16-bit lanes set in an 8-bit mask to the front, in order.
-struct PackTable {
-  alignas(16) std::uint8_t shuffle[256][16];
-  PackTable() {
-    for (int m = 0; m < 256; ++m) {
-      int p = 0;
-      for (int j = 0; j < 8; ++j)
-        if (m & (1 << j)) {
-          shuffle[m][2 * p] = static_cast<std::uint8_t>(2 * j);
-          shuffle[m][2 * p + 1] = static_cast<std::uint8_t>(2 * j + 1);
-          ++p;
-        }
-      for (; p < 8; ++p) shuffle[m][2 * p] = shuffle[m][2 * p + 1] = 0x80;
-    }
-  }
-};
-const PackTable kPack;
-
 // count_steps() without a branch per group: the non-zero steps of 8 voxels at a time are packed
 // to the front of a vector (a table of shuffles indexed by the non-zero mask) and appended to
 // `list` (room for n + 8), and only they are counted. On the scene 20 % of the voxels are
@@ -465,7 +448,7 @@ __attribute__((target("avx2"))) void count_steps_avx2(const detail::code_t* v, s
     const __m128i s = _mm_loadu_si128(reinterpret_cast<const __m128i*>(v + x));
     const __m128i flat = _mm_cmpeq_epi16(s, zero);
     const unsigned m = ~static_cast<unsigned>(_mm_movemask_epi8(_mm_packs_epi16(flat, flat))) & 0xFFu;
-    const __m128i ctl = _mm_load_si128(reinterpret_cast<const __m128i*>(kPack.shuffle[m]));
+    const __m128i ctl = _mm_load_si128(reinterpret_cast<const __m128i*>(detail::kLanePack.shuffle[m]));
     _mm_storeu_si128(reinterpret_cast<__m128i*>(list + len), _mm_shuffle_epi8(s, ctl));
     len += static_cast<std::size_t>(__builtin_popcount(m));
   }

@@ -87,7 +87,10 @@ TEST(Divide, SameLeavesForAnyThreadCount) {
 TEST(Divide, CountCodesMatchesOneByOneCounting) {
   // Codes in runs: whole rows of one code (the eight-at-once path), rows with one voxel
   // different at each position, kNoTexture runs and single kNoTexture voxels; blocks at every
-  // offset and width, so rows of 8 start anywhere and leave tails of 1..7.
+  // offset and width, so rows of 8 start anywhere and leave tails of 1..7, and of 1 to 4 rows
+  // (odd counts leave a row without a partner for the two-row kernel). Every counting kernel
+  // the processor has (they follow the texture kernel setting); the packed ones take the block's
+  // first code as the common one, kNoTexture included.
   const Dims d{37, 5, 4};
   TextureMap t;
   t.bins = 8;
@@ -100,24 +103,32 @@ TEST(Divide, CountCodesMatchesOneByOneCounting) {
     for (std::size_t k = 0; k < run && i < t.codes.size(); ++k, ++i) t.codes[i] = c;
     if (rnd() % 3 == 0 && i < t.codes.size()) t.codes[i++] = static_cast<std::uint16_t>(rnd() % 512);
   }
-  std::size_t checked = 0, uniform_rows = 0;
-  for (std::uint32_t x0 = 0; x0 < 12; ++x0)
-    for (std::uint32_t w = 1; x0 + w <= d.nx; w += 3) {
-      const Block b{{x0, 1, 0}, {x0 + w, 4, 4}};
-      std::vector<std::uint32_t> got(512, 7), want(512, 0);
-      count_codes(t, d, b, 512, got.data());
-      for (std::uint32_t z = b.lo[2]; z < b.hi[2]; ++z)
-        for (std::uint32_t y = b.lo[1]; y < b.hi[1]; ++y)
-          for (std::uint32_t x = b.lo[0]; x < b.hi[0]; ++x) {
-            const std::uint16_t c = t.codes[x + d.nx * (y + d.ny * z)];
-            if (c != kNoTexture) ++want[c];
-          }
-      ASSERT_EQ(got, want) << "block x " << x0 << " width " << w;
-      ++checked;
-    }
+  for (std::uint32_t x = 0; x < 12; x += 3) t.codes[x + d.nx] = kNoTexture;  // blocks whose first voxel has none
+  std::size_t checked = 0, uniform_rows = 0, first_without_texture = 0;
+  for (int kernel = 0; kernel < 3; ++kernel) {
+    detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
+    for (std::uint32_t x0 = 0; x0 < 12; ++x0)
+      for (std::uint32_t w = 1; x0 + w <= d.nx; w += 3)
+        for (std::uint32_t rows = 1; rows <= 4; ++rows) {
+          const Block b{{x0, 1, 0}, {x0 + w, 1 + rows, 4}};
+          std::vector<std::uint32_t> got(512, 7), want(512, 0);
+          count_codes(t, d, b, 512, got.data());
+          for (std::uint32_t z = b.lo[2]; z < b.hi[2]; ++z)
+            for (std::uint32_t y = b.lo[1]; y < b.hi[1]; ++y)
+              for (std::uint32_t x = b.lo[0]; x < b.hi[0]; ++x) {
+                const std::uint16_t c = t.codes[x + d.nx * (y + d.ny * z)];
+                if (c != kNoTexture) ++want[c];
+              }
+          ASSERT_EQ(got, want) << "kernel " << kernel << " block x " << x0 << " width " << w << " rows " << rows;
+          ++checked;
+          first_without_texture += t.codes[x0 + d.nx] == kNoTexture;
+        }
+  }
+  detail::set_texture_kernel(detail::TextureKernel::fastest);
+  EXPECT_GT(first_without_texture, 10u);
   // The map really has rows of eight equal codes, with and without texture.
   for (std::size_t i = 0; i + 8 <= t.codes.size(); ++i)
     uniform_rows += std::all_of(t.codes.begin() + i, t.codes.begin() + i + 8, [&](auto c) { return c == t.codes[i]; });
   EXPECT_GT(uniform_rows, 50u);
-  EXPECT_GT(checked, 100u);
+  EXPECT_GT(checked, 1000u);
 }

@@ -116,6 +116,37 @@ TEST(Reference, WholePipelineMatchesForBothPresets) {
   }
 }
 
+// The built-in operator's codes through the division as segment() runs it (faces_only: blocks
+// inside the map counted without the kNoTexture test, the flat code as the common one), with
+// every counting kernel the processor has (they follow the texture kernel setting).
+TEST(Reference, DivisionMatchesWithEveryCountingKernel) {
+  std::size_t with_flat = 0, without_flat = 0;
+  for (const Case& c : kCases) {
+    const Grid g = test::random_map(c.dims, c.seed, c.noise);
+    const TextureMap t = reference::texture(g, 8);
+    const auto flat = static_cast<std::size_t>(std::count(t.codes.begin(), t.codes.end(), 63 * 8));
+    with_flat += 10 * flat >= t.codes.size();
+    without_flat += flat == 0;
+    for (Params p : {Params::paper(), Params::defaults()}) {
+      const std::vector<Block> want = reference::divide(g, t, p);
+      for (int kernel = 0; kernel < 3; ++kernel) {
+        detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
+        for (int threads : {1, 2}) {
+          p.threads = threads;
+          const auto got = detail::divide_codes(g, reinterpret_cast<const detail::code_t*>(t.codes.data()),
+                                                t.code_count(), p, /*faces_only=*/true);
+          EXPECT_TRUE(same_blocks(got, want)) << "seed " << c.seed << " kernel " << kernel << " threads " << threads;
+        }
+      }
+      detail::set_texture_kernel(detail::TextureKernel::fastest);
+    }
+  }
+  // Maps where the flat (common) code is a tenth of the voxels or more (unknown boxes at exactly
+  // 0.5), and maps without it.
+  EXPECT_GE(with_flat, 3u);
+  EXPECT_GE(without_flat, 1u);
+}
+
 // A plugin's codes may leave any voxel without texture (kNoTexture), inside the map too: there
 // the division tests every voxel (only the built-in operator's codes, whose kNoTexture voxels lie
 // on the outer faces, are counted without the test in blocks inside the map).
