@@ -87,11 +87,11 @@ TEST(Divide, SameLeavesForAnyThreadCount) {
 TEST(Divide, CountCodesMatchesOneByOneCounting) {
   // Codes in runs: whole rows of one code (the eight-at-once path), rows with one voxel
   // different at each position, kNoTexture runs and single kNoTexture voxels; blocks at every
-  // offset and width, so rows of 8 start anywhere and leave tails of 1..7, and of 1 to 4 rows
-  // (odd counts leave a row without a partner for the two-row kernel). Every counting kernel
+  // offset and width, so rows of 8 start anywhere and leave tails of 1..7, and of 1 to 8 rows
+  // (blocks 8 wide go four rows at a time where they can, then two, then one). Every counting kernel
   // the processor has (they follow the texture kernel setting); the packed ones take the block's
   // first code as the common one, kNoTexture included.
-  const Dims d{37, 5, 4};
+  const Dims d{37, 9, 4};
   TextureMap t;
   t.bins = 8;
   t.codes.resize(d.count());
@@ -108,8 +108,8 @@ TEST(Divide, CountCodesMatchesOneByOneCounting) {
   for (int kernel = 0; kernel < 3; ++kernel) {
     detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
     for (std::uint32_t x0 = 0; x0 < 12; ++x0)
-      for (std::uint32_t w = 1; x0 + w <= d.nx; w += 3)
-        for (std::uint32_t rows = 1; rows <= 4; ++rows) {
+      for (std::uint32_t w = 1; x0 + w <= d.nx; w += w < 9 ? 1 : 5)  // 8: the four-row path
+        for (std::uint32_t rows = 1; rows <= 8; ++rows) {
           const Block b{{x0, 1, 0}, {x0 + w, 1 + rows, 4}};
           std::vector<std::uint32_t> got(512, 7), want(512, 0);
           count_codes(t, d, b, 512, got.data());
