@@ -17,6 +17,8 @@ namespace {
 thread_local Context* installed = nullptr;
 }  // namespace
 
+bool pool_installed() { return installed != nullptr; }
+
 PoolScope::PoolScope(Context* context) : saved_(installed) { installed = context; }
 PoolScope::~PoolScope() { installed = saved_; }
 

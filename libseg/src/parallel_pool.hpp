@@ -20,6 +20,9 @@ class PoolScope {
   Context* saved_;
 };
 
+// True when a context is installed on this thread (parallel loops go to its pool).
+bool pool_installed();
+
 // Runs fn over [0, n) in min(threads, context threads, n) chunks on the context's pool.
 void run_on_pool(Context* context, std::size_t n, int threads,
                  const std::function<void(std::size_t, std::size_t)>& fn);

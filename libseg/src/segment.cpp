@@ -10,6 +10,7 @@
 #include <malloc.h>
 #endif
 
+#include "occseg/context.hpp"
 #include "occseg/create.hpp"
 #include "occseg/departures.hpp"
 #include "occseg/error.hpp"
@@ -21,6 +22,7 @@
 #include "codes_internal.hpp"
 #include "huge_pages.hpp"
 #include "own_states_internal.hpp"
+#include "parallel_pool.hpp"
 #include "segment_internal.hpp"
 
 namespace occseg {
@@ -94,6 +96,14 @@ void check_map(const Grid& grid, int threads, bool values) {
 }  // namespace
 
 Result segment(const Grid& grid, const Params& params, bool keep_stages) {
+  // Without a caller's context, one pool for this call: its 20-odd parallel loops would otherwise
+  // each start their threads (about 40 us per loop, bench/bench_pipeline.cpp's
+  // BM_ParallelForDispatch). The call stays self-contained: the pool ends with it.
+  params.validate();
+  if (!pool_installed() && resolve_threads(params.threads) > 1) {
+    Context pool(params.threads);
+    return segment(pool, grid, params, keep_stages);
+  }
   return segment_into(grid, params, keep_stages, LabelArray());
 }
 
