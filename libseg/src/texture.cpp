@@ -258,38 +258,45 @@ __attribute__((target("avx2"))) bool contrast_row_avx2(const float* p, const std
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 // The voxels x .. x + 15 of the row at p where `m` has their bits (the others are not read or
 // written); `bad` gathers the voxels outside [0, 1], `rc` the kRecheck ones.
-__attribute__((target("avx512f"))) inline void contrast16(const float* p, const std::ptrdiff_t* o, std::size_t x,
-                                                          __mmask16 m, detail::code_t* out, std::uint8_t* lbp,
-                                                          __mmask16& bad, __mmask16& rc) {
+//
+// The LBP code and the count of neighbours >= the centre are built in bytes (16 per 128-bit
+// vector: cheaper than the 16 x 32-bit lanes of the floats), and each side's sum starts from
+// the first neighbour or 0.0 and adds the second only where it is on that side: x + 0.0 = x for
+// the non-negative values here, so the sums are bit for bit those of adding both masked values.
+__attribute__((target("avx512f,avx512bw,avx512vl"))) inline void contrast16(const float* p, const std::ptrdiff_t* o,
+                                                                           std::size_t x, __mmask16 m,
+                                                                           detail::code_t* out, std::uint8_t* lbp,
+                                                                           __mmask16& bad, __mmask16& rc) {
   const __m512 zero = _mm512_setzero_ps(), err = _mm512_set1_ps(1e-6f), one = _mm512_set1_ps(1.0f);
   const __m512 fine = _mm512_set1_ps(static_cast<float>(ContrastQuantizer::kFine));
   const __m512i top = _mm512_set1_epi32(ContrastQuantizer::kFine - 1), recheck = _mm512_set1_epi32(kRecheck);
-  const __m512i zeroi = _mm512_setzero_si512(), inc = _mm512_set1_epi32(1), six = _mm512_set1_epi32(6);
+  const __m512i inc = _mm512_set1_epi32(1), six = _mm512_set1_epi32(6);
   const __m512 recip = _mm512_setr_ps(1.0f, 1.0f, 1.0f / 2, 1.0f / 3, 1.0f / 4, 1.0f / 5, 1.0f / 6, 1.0f, 1.0f, 1.0f,
                                       1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f);
+  const __m128i one8 = _mm_set1_epi8(1);
   const __m512 c = _mm512_maskz_loadu_ps(m, p + x);
   bad = static_cast<__mmask16>(bad | (m & (_mm512_cmp_ps_mask(c, zero, _CMP_NGE_UQ) | _mm512_cmp_ps_mask(c, one, _CMP_NLE_UQ))));
   __m512 s1[3], s0[3];
-  __m512i up_count = zeroi, bits = zeroi;
+  __m128i up8 = _mm_setzero_si128(), bits = _mm_setzero_si128();
   for (int k = 0; k < 3; ++k) {
     const __m512 v = _mm512_maskz_loadu_ps(m, p + x + o[2 * k]), w = _mm512_maskz_loadu_ps(m, p + x + o[2 * k + 1]);
     const __mmask16 vu = _mm512_cmp_ps_mask(v, c, _CMP_GE_OQ), wu = _mm512_cmp_ps_mask(w, c, _CMP_GE_OQ);
-    if (lbp) {
-      bits = _mm512_mask_or_epi32(bits, vu, bits, _mm512_set1_epi32(1 << (2 * k)));
-      bits = _mm512_mask_or_epi32(bits, wu, bits, _mm512_set1_epi32(2 << (2 * k)));
-    }
-    s1[k] = _mm512_add_ps(_mm512_maskz_mov_ps(vu, v), _mm512_maskz_mov_ps(wu, w));
-    s0[k] = _mm512_add_ps(_mm512_maskz_mov_ps(static_cast<__mmask16>(~vu), v),
-                          _mm512_maskz_mov_ps(static_cast<__mmask16>(~wu), w));
-    up_count = _mm512_mask_add_epi32(up_count, vu, up_count, inc);
-    up_count = _mm512_mask_add_epi32(up_count, wu, up_count, inc);
+    bits = _mm_mask_add_epi8(bits, vu, bits, _mm_set1_epi8(static_cast<char>(1 << (2 * k))));
+    bits = _mm_mask_add_epi8(bits, wu, bits, _mm_set1_epi8(static_cast<char>(2 << (2 * k))));
+    up8 = _mm_mask_add_epi8(up8, vu, up8, one8);
+    up8 = _mm_mask_add_epi8(up8, wu, up8, one8);
+    s1[k] = _mm512_mask_add_ps(_mm512_maskz_mov_ps(vu, v), wu, _mm512_maskz_mov_ps(vu, v), w);
+    const auto vd = static_cast<__mmask16>(~vu), wd = static_cast<__mmask16>(~wu);
+    s0[k] = _mm512_mask_add_ps(_mm512_maskz_mov_ps(vd, v), wd, _mm512_maskz_mov_ps(vd, v), w);
   }
+  const __m512i up_count = _mm512_cvtepu8_epi32(up8);
   const __m512 sum1 = _mm512_add_ps(_mm512_add_ps(s1[0], s1[1]), s1[2]);
   const __m512 sum0 = _mm512_add_ps(_mm512_add_ps(s0[0], s0[1]), s0[2]);
   const __m512 con = _mm512_sub_ps(_mm512_mul_ps(sum1, _mm512_permutexvar_ps(up_count, recip)),
                                    _mm512_mul_ps(sum0, _mm512_permutexvar_ps(_mm512_sub_epi32(six, up_count), recip)));
-  const __mmask16 two_sided = static_cast<__mmask16>(_mm512_cmpgt_epi32_mask(up_count, zeroi) &
-                                                     _mm512_cmpgt_epi32_mask(six, up_count));
+  // Neighbours on both sides: the LBP code is neither 0 nor 63.
+  const __mmask16 two_sided = static_cast<__mmask16>(_mm_test_epi8_mask(bits, bits) &
+                                                     _mm_cmpneq_epi8_mask(bits, _mm_set1_epi8(63)));
   const __m512 lo = _mm512_mul_ps(_mm512_sub_ps(con, err), fine), hi = _mm512_mul_ps(_mm512_add_ps(con, err), fine);
   const __m512i step = _mm512_min_epi32(_mm512_cvttps_epi32(lo), top);
   const __m512i step_hi = _mm512_min_epi32(_mm512_cvttps_epi32(hi), top);
@@ -297,9 +304,9 @@ __attribute__((target("avx512f"))) inline void contrast16(const float* p, const 
                                                 _mm512_cmpeq_epi32_mask(step, step_hi));
   rc = static_cast<__mmask16>(rc | (m & two_sided & ~sure));
   const __m512i v = _mm512_mask_blend_epi32(sure, recheck, _mm512_add_epi32(step, inc));
-  // Values <= 0xFFFF (and LBP codes <= 63): truncating to 16 (8) bits keeps them.
-  _mm512_mask_cvtepi32_storeu_epi16(out + x, m, _mm512_maskz_mov_epi32(two_sided, v));
-  if (lbp) _mm512_mask_cvtepi32_storeu_epi8(lbp + x, m, bits);
+  // Values <= 0xFFFF: truncating to 16 bits keeps them.
+  _mm256_mask_storeu_epi16(out + x, m, _mm512_cvtepi32_epi16(_mm512_maskz_mov_epi32(two_sided, v)));
+  if (lbp) _mm_mask_storeu_epi8(lbp + x, m, bits);
 }
 
 // contrast_row_avx2 for 16 voxels per step in AVX-512 (F only): the same operations in the same
@@ -308,7 +315,7 @@ __attribute__((target("avx512f"))) inline void contrast16(const float* p, const 
 // instructions per 8 voxels there). The last n % 16 voxels are one masked step (a scalar tail
 // cost a row of 318 as much as 40 of its voxels). `any_recheck` is set when some voxel is
 // kRecheck.
-__attribute__((target("avx512f"))) bool contrast_row_avx512(const float* p, const std::ptrdiff_t* off, std::size_t n,
+__attribute__((target("avx512f,avx512bw,avx512vl"))) bool contrast_row_avx512(const float* p, const std::ptrdiff_t* off, std::size_t n,
                                                             detail::code_t* out, std::uint8_t* lbp, bool& any_recheck) {
   const std::ptrdiff_t o[6] = {off[0], off[1], off[2], off[3], off[4], off[5]};  // see contrast_row_avx2
   __mmask16 bad = 0, rc = 0;
