@@ -257,7 +257,9 @@ __attribute__((target("avx2"))) bool contrast_row_avx2(const float* p, const std
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 // The voxels x .. x + 15 of the row at p where `m` has their bits (the others are not read or
-// written); `bad` gathers the voxels outside [0, 1], `rc` the kRecheck ones.
+// written); `top_bits` keeps the largest bit pattern of the centres seen (as unsigned integers:
+// [+0, 1] is 0 .. 0x3F800000, so anything above is outside it, NaN or -0.0), `rc` gathers the
+// kRecheck voxels.
 //
 // The LBP code and the count of neighbours >= the centre are built in bytes (16 per 128-bit
 // vector: cheaper than the 16 x 32-bit lanes of the floats), and each side's sum starts from
@@ -266,8 +268,8 @@ __attribute__((target("avx2"))) bool contrast_row_avx2(const float* p, const std
 __attribute__((target("avx512f,avx512bw,avx512vl"))) inline void contrast16(const float* p, const std::ptrdiff_t* o,
                                                                            std::size_t x, __mmask16 m,
                                                                            detail::code_t* out, std::uint8_t* lbp,
-                                                                           __mmask16& bad, __mmask16& rc) {
-  const __m512 zero = _mm512_setzero_ps(), err = _mm512_set1_ps(1e-6f), one = _mm512_set1_ps(1.0f);
+                                                                           __m512i& top_bits, __mmask16& rc) {
+  const __m512 zero = _mm512_setzero_ps(), err = _mm512_set1_ps(1e-6f);
   const __m512 fine = _mm512_set1_ps(static_cast<float>(ContrastQuantizer::kFine));
   const __m512i top = _mm512_set1_epi32(ContrastQuantizer::kFine - 1), recheck = _mm512_set1_epi32(kRecheck);
   const __m512i inc = _mm512_set1_epi32(1), six = _mm512_set1_epi32(6);
@@ -275,7 +277,7 @@ __attribute__((target("avx512f,avx512bw,avx512vl"))) inline void contrast16(cons
                                       1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f);
   const __m128i one8 = _mm_set1_epi8(1);
   const __m512 c = _mm512_maskz_loadu_ps(m, p + x);
-  bad = static_cast<__mmask16>(bad | (m & (_mm512_cmp_ps_mask(c, zero, _CMP_NGE_UQ) | _mm512_cmp_ps_mask(c, one, _CMP_NLE_UQ))));
+  top_bits = _mm512_max_epu32(top_bits, _mm512_castps_si512(c));  // masked lanes: +0.0
   __m512 s1[3], s0[3];
   __m128i up8 = _mm_setzero_si128(), bits = _mm_setzero_si128();
   for (int k = 0; k < 3; ++k) {
@@ -318,12 +320,14 @@ __attribute__((target("avx512f,avx512bw,avx512vl"))) inline void contrast16(cons
 __attribute__((target("avx512f,avx512bw,avx512vl"))) bool contrast_row_avx512(const float* p, const std::ptrdiff_t* off, std::size_t n,
                                                             detail::code_t* out, std::uint8_t* lbp, bool& any_recheck) {
   const std::ptrdiff_t o[6] = {off[0], off[1], off[2], off[3], off[4], off[5]};  // see contrast_row_avx2
-  __mmask16 bad = 0, rc = 0;
+  __m512i top_bits = _mm512_setzero_si512();
+  __mmask16 rc = 0;
   std::size_t x = 0;
-  for (; x + 16 <= n; x += 16) contrast16(p, o, x, 0xFFFF, out, lbp, bad, rc);
-  if (x < n) contrast16(p, o, x, static_cast<__mmask16>((1u << (n - x)) - 1), out, lbp, bad, rc);
+  for (; x + 16 <= n; x += 16) contrast16(p, o, x, 0xFFFF, out, lbp, top_bits, rc);
+  if (x < n) contrast16(p, o, x, static_cast<__mmask16>((1u << (n - x)) - 1), out, lbp, top_bits, rc);
   any_recheck = rc != 0;
-  return bad == 0;
+  // One test per row instead of two compares per step; a row with -0.0 (valid) takes the exact check.
+  return _mm512_cmpgt_epu32_mask(top_bits, _mm512_set1_epi32(0x3F800000)) == 0 || probabilities_in_range(p, n);
 }
 #pragma GCC diagnostic pop
 

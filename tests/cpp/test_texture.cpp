@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -98,7 +99,7 @@ TEST(Texture, TwoDimensionalMapKeepsInPlaneTexture) {
 // and in their scalar tails; for each kernel the processor has, since each checks its own rows.
 TEST(Texture, BadValuesAreErrorsNamingTheVoxel) {
   const Dims d{21, 7, 6};
-  const float bad[] = {std::nanf(""), INFINITY, -0.25f, 1.5f};
+  const float bad[] = {std::nanf(""), INFINITY, -0.25f, 1.5f, std::nextafter(1.0f, 2.0f), -1e-40f};
   const std::size_t spots[][3] = {{0, 0, 0}, {4, 3, 2}, {20, 6, 5}, {0, 3, 3}, {5, 0, 4},  {2, 6, 1},
                                   {1, 1, 1}, {12, 3, 2}, {16, 4, 4}, {17, 2, 3}, {19, 5, 1}, {20, 2, 4}};
   constexpr int kSpots = sizeof spots / sizeof spots[0];
@@ -125,5 +126,27 @@ TEST(Texture, BadValuesAreErrorsNamingTheVoxel) {
         }
   }
   detail::set_texture_kernel(detail::TextureKernel::fastest);
-  EXPECT_EQ(checked, 3 * 4 * kSpots * 3);
+  EXPECT_EQ(checked, 3 * 6 * kSpots * 3);
+}
+
+// The edges of [0, 1] are valid wherever they sit, -0.0 (which compares equal to 0) and
+// subnormals included; every kernel accepts them and gives the same codes. (The AVX-512 kernel
+// tests a row's values as unsigned bit patterns, where -0.0 lies above 1.0: such rows take the
+// exact test.)
+TEST(Texture, EdgeValuesAreAccepted) {
+  const Dims d{37, 6, 5};
+  Grid g(d, 0.3f);
+  const float edge[] = {-0.0f, 0.0f, 1.0f, 1e-40f, std::nextafter(1.0f, 0.0f)};
+  for (std::size_t i = 0; i < g.p.size(); ++i) g.p[i] = i % 3 ? 0.1f + 0.8f * float(i % 7) / 6 : edge[i % 5];
+  std::vector<std::uint16_t> first;
+  for (int kernel = 0; kernel < 3; ++kernel) {
+    detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
+    for (int threads : {1, 2}) {
+      const TextureMap t = compute_texture(g, 8, threads);
+      if (first.empty()) first = t.codes;
+      EXPECT_EQ(t.codes, first) << "kernel " << kernel << " threads " << threads;
+    }
+  }
+  detail::set_texture_kernel(detail::TextureKernel::fastest);
+  EXPECT_EQ(std::count(first.begin(), first.end(), kNoTexture), 2 * (37 * 6 + 37 * 5 + 6 * 5) - 4 * (37 + 6 + 5) + 8);
 }
