@@ -193,6 +193,18 @@ void detail::CellRows::add_row(std::size_t y, std::size_t z) {
 
 namespace {
 
+constexpr auto kFreeState = static_cast<std::uint8_t>(State::free);
+constexpr auto kUnknownState = static_cast<std::uint8_t>(State::unknown);
+constexpr auto kOccupiedState = static_cast<std::uint8_t>(State::occupied);
+
+// 0xFF in each byte of `eight` equal to v, 0 in the others (exact: no borrow between bytes).
+inline std::uint64_t bytes_equal(std::uint64_t eight, std::uint8_t v) {
+  constexpr std::uint64_t low7 = 0x7F7F7F7F7F7F7F7Full, high = 0x8080808080808080ull;
+  const std::uint64_t x = eight ^ (0x0101010101010101ull * v);  // 0 where equal
+  const std::uint64_t nonzero = ((x & low7) + low7) | x;         // bit 7 of a byte: byte != 0
+  return ((~nonzero & high) >> 7) * 0xFF;
+}
+
 // Block by block: any set of disjoint blocks. Voxels outside every block are left free.
 void create_by_blocks(const Grid& grid, const std::vector<Block>& blocks, const Params& params, std::uint8_t* own,
                       float lo, float hi, std::uint8_t* states) {
@@ -227,7 +239,8 @@ void create_by_blocks(const Grid& grid, const std::vector<Block>& blocks, const 
 // sum in scan order needs, ran at the latency of an addition). Returns false (nothing written)
 // for other blocks. With `means`, the blocks' means go there and no states are written.
 bool create_by_rows(const Grid& grid, const std::vector<Block>& blocks, const Params& params, detail::CellRows& rows,
-                    bool summed, std::uint8_t* states, std::vector<double>* means = nullptr) {
+                    bool summed, std::uint8_t* states, std::vector<double>* means = nullptr,
+                    detail::GrowthRows* growth = nullptr) {
   const Dims& d = grid.dims;
   const std::size_t dim[3] = {d.nx, d.ny, d.nz};
   constexpr std::size_t c = kMeanCell;
@@ -280,9 +293,21 @@ bool create_by_rows(const Grid& grid, const std::vector<Block>& blocks, const Pa
     }
   });
   if (means) return true;
+  // The growth's masks (GrowthRows): a cell covers 8 voxels of a row, a byte of a mask word, so
+  // word i of a row holds cells 8i .. 8i + 7 (static_assert below), each byte 0xFF or 0.
+  static_assert(kMeanCell == 8, "a cell must be one byte of the growth's mask words");
+  const std::size_t words = (d.nx + 63) / 64;
+  detail::word_t* const W = growth ? reinterpret_cast<detail::word_t*>(growth->scratch) : nullptr;
+  detail::word_t* const C = W ? W + d.ny * d.nz * words : nullptr;
+  const std::uint64_t last = d.nx % 64 ? (std::uint64_t(1) << (d.nx % 64)) - 1 : ~std::uint64_t(0);
   parallel_for(d.ny * d.nz, params.threads, [&](std::size_t r0, std::size_t r1) {
+    // The masks of the row of cells the last row was in (the c rows of a row of cells share them).
+    std::vector<std::uint64_t> cells_w(W ? words : 0), cells_c(W ? words : 0);
+    std::size_t cells_row = ~std::size_t(0);
+    bool cells_occupied = false;
     for (std::size_t r = r0; r < r1; ++r) {
-      const std::uint8_t* cs = cell_state.data() + ncx * (r % d.ny / c + ncy * (r / d.ny / c));
+      const std::size_t cr = r % d.ny / c + ncy * (r / d.ny / c);
+      const std::uint8_t* cs = cell_state.data() + ncx * cr;
       std::uint8_t* row = states + d.nx * r;
       std::size_t cx = 0;
       for (; (cx + 1) * c <= d.nx; ++cx) {  // one 8-byte store per cell
@@ -290,8 +315,26 @@ bool create_by_rows(const Grid& grid, const std::vector<Block>& blocks, const Pa
         std::memcpy(row + cx * c, &eight, c);
       }
       if (cx < ncx) std::memset(row + cx * c, cs[cx], d.nx - cx * c);
+      if (!W) continue;
+      if (cr != cells_row) {
+        cells_row = cr;
+        for (std::size_t i = 0; i < words; ++i) {
+          std::uint64_t eight = ~std::uint64_t(0);  // past the last cell: no state
+          std::memcpy(&eight, cs + 8 * i, std::min<std::size_t>(8, ncx - 8 * i));
+          const std::uint64_t keep = i + 1 == words ? last : ~std::uint64_t(0);
+          cells_w[i] = bytes_equal(eight, kUnknownState) & keep;
+          cells_c[i] = bytes_equal(eight, kFreeState) & keep;
+        }
+        cells_occupied = std::memchr(cs, kOccupiedState, ncx) != nullptr;
+      }
+      for (std::size_t i = 0; i < words; ++i) {
+        W[r * words + i] = cells_w[i];
+        C[r * words + i] = cells_c[i] & growth->unknown_bits[r * words + i];
+      }
+      growth->occupied_rows[r] = cells_occupied;
     }
   });
+  if (growth) growth->filled = true;
   return true;
 }
 
@@ -299,13 +342,13 @@ bool create_by_rows(const Grid& grid, const std::vector<Block>& blocks, const Pa
 // whose states are all written here, in parallel.
 template <class V>
 V create(const Grid& grid, const std::vector<Block>& blocks, const Params& params, std::uint8_t* own,
-         const detail::CellRows* summed = nullptr) {
+         const detail::CellRows* summed = nullptr, detail::GrowthRows* growth = nullptr) {
   V states;
   resize_huge(states, grid.dims.count());
   float lo = 0, hi = 0;
   if (own) detail::float_bounds(params.free_below, params.occupied_above, lo, hi);
   detail::CellRows rows = summed ? *summed : detail::CellRows(grid, own, lo, hi);
-  if (!create_by_rows(grid, blocks, params, rows, summed != nullptr, states.data()))
+  if (!create_by_rows(grid, blocks, params, rows, summed != nullptr, states.data(), nullptr, growth))
     create_by_blocks(grid, blocks, params, own, lo, hi, states.data());
   return states;
 }
@@ -328,8 +371,8 @@ std::vector<std::uint8_t> create_segments(const Grid& grid, const std::vector<Bl
 
 UninitVector<std::uint8_t> detail::create_segments_and_own_states(const Grid& grid, const std::vector<Block>& blocks,
                                                                   const Params& params, std::uint8_t* own,
-                                                                  const CellRows* summed) {
-  return create<UninitVector<std::uint8_t>>(grid, blocks, params, own, summed);
+                                                                  const CellRows* summed, GrowthRows* growth) {
+  return create<UninitVector<std::uint8_t>>(grid, blocks, params, own, summed, growth);
 }
 
 }  // namespace occseg

@@ -79,9 +79,26 @@ class CellRows {
 // (division's leaves do), or the voxels outside every block hold garbage. With `summed` (every
 // row of the map added, with `own` and float_bounds() of params), the map is read only for
 // blocks off the lattice of cells.
+//
+// With `growth`, the creation also writes the unknown growth's row masks and occupied-row flags
+// (GrowthRows) when the blocks lie on the lattice of cells, and sets growth->filled.
+struct GrowthRows;
 UninitVector<std::uint8_t> create_segments_and_own_states(const Grid& grid, const std::vector<Block>& blocks,
                                                           const Params& params, std::uint8_t* own,
-                                                          const CellRows* summed = nullptr);
+                                                          const CellRows* summed = nullptr,
+                                                          GrowthRows* growth = nullptr);
+
+// What the unknown growth packs from the states before it starts, written by the creation as it
+// writes the states from its cells' states instead (8 voxels per cell and per byte of a mask
+// word, no reading of the states back): for every row, W (state unknown) and C (state free and
+// own state unknown) in `scratch` as grow_unknown() keeps them (grow_unknown_scratch_bytes()),
+// and its byte of `occupied_rows` (an occupied voxel in the row).
+struct GrowthRows {
+  std::uint8_t* scratch = nullptr;              // 8-byte aligned, grow_unknown_scratch_bytes()
+  const std::uint64_t* unknown_bits = nullptr;  // CellRows' bits of the own states' unknown voxels
+  std::uint8_t* occupied_rows = nullptr;        // one byte per row
+  bool filled = false;                          // set by the creation when it wrote them
+};
 // For tests: the block means as creation sums them when the blocks tile the map on the lattice of
 // kMeanCell^3 cells (row by row, into the cells' sums); empty for other blocks.
 std::vector<double> block_means_by_rows(const Grid& grid, const std::vector<Block>& blocks, int threads);
@@ -98,14 +115,18 @@ void refine_boundaries(std::uint8_t* states, const std::uint8_t* own, const Dims
 std::size_t grow_unknown_scratch_bytes(const Dims& dims);
 // With `occupied_rows` (one byte per row of voxels), row r's byte says whether it holds an
 // occupied voxel.
+// With `packed` (GrowthRows filled by the creation), scratch and occupied_rows hold every row's
+// masks and flag already: the states are not read before the scans.
 void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& dims, int threads,
                   std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits = nullptr,
-                  std::uint8_t* occupied_rows = nullptr);
+                  std::uint8_t* occupied_rows = nullptr, bool packed = false);
 
 // refine_unknown() then refine_boundaries(), the masks of the first in `scratch` if it has room.
-// `unknown_bits` as in grow_unknown(), or nullptr.
+// `unknown_bits` as in grow_unknown(), or nullptr; `growth` (its scratch the same as `scratch`),
+// when the creation filled it.
 void refine(std::uint8_t* states, const std::uint8_t* own, const Dims& dims, const Params& params,
-            std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits = nullptr);
+            std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits = nullptr,
+            const GrowthRows* growth = nullptr);
 // With `unknown_bits` (as in grow_unknown()), the opening starts from them instead of `own`.
 void apply_voxel_rules(std::uint8_t* states, const std::uint8_t* own, const Dims& dims,
                        const Params& params, std::uint8_t* scratch, std::size_t scratch_bytes,

@@ -337,12 +337,16 @@ void detail::refine_boundaries(std::uint8_t* st, const std::uint8_t* own, const 
 }
 
 void detail::refine(std::uint8_t* st, const std::uint8_t* own, const Dims& d, const Params& params,
-                    std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits) {
-  // The growth reads every row anyway: it flags those with an occupied voxel for the sweeps (it
-  // never makes or unmakes one), which then need not read the map once more (0.4 ms).
-  std::vector<std::uint8_t> occupied_rows(d.ny * d.nz);
-  grow_unknown(st, own, d, params.threads, scratch, scratch_bytes, unknown_bits, occupied_rows.data());
-  run_sweeps(st, own, d, params.threads, lookahead_of(params), boundary_sweeps(params), occupied_rows.data());
+                    std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits,
+                    const GrowthRows* growth) {
+  // The growth reads every row anyway (or the creation flagged them): rows with an occupied voxel
+  // are flagged for the sweeps (the growth never makes or unmakes one), which then need not read
+  // the map once more (0.4 ms).
+  const bool packed = growth && growth->filled && growth->scratch == scratch;
+  std::vector<std::uint8_t> own_flags(packed ? 0 : d.ny * d.nz);
+  std::uint8_t* const occupied_rows = packed ? growth->occupied_rows : own_flags.data();
+  grow_unknown(st, own, d, params.threads, scratch, scratch_bytes, unknown_bits, occupied_rows, packed);
+  run_sweeps(st, own, d, params.threads, lookahead_of(params), boundary_sweeps(params), occupied_rows);
 }
 
 void refine_boundaries(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,

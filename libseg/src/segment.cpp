@@ -164,8 +164,14 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   st.begin("creation");
   std::uint8_t* const scratch = reinterpret_cast<std::uint8_t*>(r.labels.data());
   std::uint8_t* const own = scratch + 3 * n;  // the voxels' own states
-  UninitVector<std::uint8_t> states =
-      detail::create_segments_and_own_states(grid, blocks, params, own, rows ? &*rows : nullptr);
+  // The growth's masks go where it keeps them (the label array's first bytes, free once the
+  // codes are counted), written by the creation if it can (GrowthRows).
+  const std::size_t room = 3 * n;
+  std::vector<std::uint8_t> occupied_rows(grid.dims.ny * grid.dims.nz);
+  detail::GrowthRows growth{scratch, unknown_bits, occupied_rows.data()};
+  const bool prefill = unknown_bits && room >= detail::grow_unknown_scratch_bytes(grid.dims);
+  UninitVector<std::uint8_t> states = detail::create_segments_and_own_states(
+      grid, blocks, params, own, rows ? &*rows : nullptr, prefill ? &growth : nullptr);
   rows.reset();
   if (keep_stages) {
     r.blocks = blocks;
@@ -175,8 +181,7 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   // The rest of the label array (3 bytes per voxel, before the own states) takes the unknown
   // growth's bit masks, then the rules': allocated apart, they raised the peak by 0.25 byte per
   // voxel.
-  const std::size_t room = 3 * n;
-  detail::refine(states.data(), own, grid.dims, params, scratch, room, unknown_bits);
+  detail::refine(states.data(), own, grid.dims, params, scratch, room, unknown_bits, &growth);
   if (params.preset == Preset::default_preset)
     detail::apply_voxel_rules(states.data(), own, grid.dims, params, scratch, room, unknown_bits);
   if (!workspace) local.unknown_bits = std::vector<std::uint64_t>();  // not at the labelling's peak

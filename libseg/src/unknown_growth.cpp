@@ -157,7 +157,7 @@ std::size_t grow_unknown_scratch_bytes(const Dims& d) {
 
 void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& d, int threads,
                   std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits,
-                  std::uint8_t* occupied_rows) {
+                  std::uint8_t* occupied_rows, bool packed) {
   const word_t* const ubits = reinterpret_cast<const word_t*>(unknown_bits);
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, rows = ny * nz, words = (nx + 63) / 64;
   std::vector<std::uint64_t> own_words;
@@ -165,6 +165,7 @@ void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& d, 
   if (scratch && scratch_bytes >= grow_unknown_scratch_bytes(d)) {
     masks = reinterpret_cast<word_t*>(scratch);
   } else {
+    packed = false;  // (the creation writes them only where they fit)
     own_words.resize(2 * rows * words);
     masks = reinterpret_cast<word_t*>(own_words.data());
   }
@@ -180,21 +181,23 @@ void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& d, 
   const bool avx2 = cpu_has_avx2();
 #endif
   parallel_for_dynamic(nz, threads, [&](std::size_t z0, std::size_t z1) {
-    ThreadScratch<std::uint64_t> own_words(ubits ? 0 : words);
+    ThreadScratch<std::uint64_t> own_words(ubits || packed ? 0 : words);
     word_t* const own_u = reinterpret_cast<word_t*>(own_words.data());
     for (std::size_t z = z0; z < z1; ++z) {
       const std::size_t r0 = ny * z;
       for (std::size_t y = 0; y < ny; ++y) {
         const std::size_t r = r0 + y;
-        // The own states' unknown voxels as bits: handed in (own is not read), or packed here.
-        const word_t* u = ubits ? ubits + words * r : own_u;
-        if (!ubits) pack_equal(own + nx * r, nx, kUnknown, own_u);
+        if (!packed) {
+          // The own states' unknown voxels as bits: handed in (own is not read), or packed here.
+          const word_t* u = ubits ? ubits + words * r : own_u;
+          if (!ubits) pack_equal(own + nx * r, nx, kUnknown, own_u);
 #ifdef OCCSEG_GROWTH_AVX2
-        if (avx2) pack_row_bits_avx2(st + nx * r, u, nx, row_w(r), row_c(r));
-        else
+          if (avx2) pack_row_bits_avx2(st + nx * r, u, nx, row_w(r), row_c(r));
+          else
 #endif
-          pack_row_bits(st + nx * r, u, nx, row_w(r), row_c(r));
-        if (occupied_rows) occupied_rows[r] = any_occupied(st + nx * r, nx);  // in L1 now
+            pack_row_bits(st + nx * r, u, nx, row_w(r), row_c(r));
+          if (occupied_rows) occupied_rows[r] = any_occupied(st + nx * r, nx);  // in L1 now
+        }
         bool g = grow_up(row_w(r), row_c(r), words);
         g = grow_down(row_w(r), row_c(r), words) || g;
         grew[r] = g;

@@ -116,6 +116,39 @@ TEST(Reference, WholePipelineMatchesForBothPresets) {
   }
 }
 
+// Rows whose only occupied voxels lie in their last cell of 8 (a map 45 voxels wide: cells 40..44
+// hold the object) must still be swept: the boundary at x = 40 into the object has low values
+// behind it, which the x sweep gives back to the free side. (The creation flags the rows with an
+// occupied voxel for the sweeps from its cells' states.) Blocks of one cell (Smax = 8), so that
+// the object's cells are created occupied; the paper preset, whose only change there is the sweep.
+TEST(Reference, RowsOccupiedOnlyInTheirLastCellAreSwept) {
+  Grid g(Dims{45, 16, 16}, 0.15f);
+  test::Rng r(11);
+  for (std::size_t z = 0; z < 16; ++z)
+    for (std::size_t y = 0; y < 16; ++y)
+      for (std::size_t x = 0; x < 45; ++x) {
+        float& v = g.at(x, y, z);
+        v = static_cast<float>(0.1 + 0.1 * r.uniform());
+        if (x >= 40) v = x <= 41 && (y + z) % 3 == 0 ? 0.1f : 0.9f;  // the object, low at its face
+      }
+  for (Params p : {Params::paper(), Params::defaults()}) {
+    p.smax = 8;
+    const reference::Output ref = reference::segment(g, p);
+    const Result got = segment(g, p, true);
+    EXPECT_EQ(got.labels, ref.labels) << preset_name(p.preset);
+    EXPECT_EQ(got.created_states, ref.created) << preset_name(p.preset);
+    if (p.preset != Preset::paper) continue;
+    // The sweep did something: voxels created occupied at the object's face end up free.
+    const std::vector<std::uint8_t> states = voxel_states(got);
+    std::size_t given_back = 0;
+    for (std::size_t z = 0; z < 16; ++z)
+      for (std::size_t y = 0; y < 16; ++y)
+        given_back += states[g.index(40, y, z)] == static_cast<std::uint8_t>(State::free) &&
+                      got.created_states[g.index(40, y, z)] == static_cast<std::uint8_t>(State::occupied);
+    EXPECT_GT(given_back, 40u);
+  }
+}
+
 // The built-in operator's codes through the division as segment() runs it (faces_only: blocks
 // inside the map counted without the kNoTexture test, the flat code as the common one), with
 // every counting kernel the processor has (they follow the texture kernel setting).
