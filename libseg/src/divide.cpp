@@ -614,7 +614,7 @@ std::vector<Block> detail::divide_codes(const Grid& grid, const code_t* codes, i
   const std::size_t bins = static_cast<std::size_t>(code_count);
   // The built-in operator's flat code: LBP 63 (no neighbour below the centre), contrast level 0.
   const auto flat = static_cast<code_t>(faces_only ? bins / 64 * 63 : kNoTexture);
-  const Divider d{grid,  codes, params, xlogx_table(), bins, (bins + 63) / 64, division_similarity(params),
+  const Divider d{grid, codes, params, xlogx_table(), bins, (bins + 63) / 64, division_similarity(params),
                   faces_only, flat, counting_kernel()};
   const bool tree_path = d.use_tree();
   // Threads take top blocks one at a time from a shared counter: they differ a lot in cost

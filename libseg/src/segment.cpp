@@ -99,10 +99,13 @@ Result segment(const Grid& grid, const Params& params, bool keep_stages) {
   // Without a caller's context, one pool for this call: its 20-odd parallel loops would otherwise
   // each start their threads (about 40 us per loop, bench/bench_pipeline.cpp's
   // BM_ParallelForDispatch). The call stays self-contained: the pool ends with it.
+  // (No Workspace: the call's bit arrays are freed before the labelling's peak, as without a pool.)
   params.validate();
   if (!pool_installed() && resolve_threads(params.threads) > 1) {
     Context pool(params.threads);
-    return segment(pool, grid, params, keep_stages);
+    Result r;
+    pool.run([&] { r = segment_into(grid, params, keep_stages, LabelArray()); });
+    return r;
   }
   return segment_into(grid, params, keep_stages, LabelArray());
 }
