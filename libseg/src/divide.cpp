@@ -122,6 +122,21 @@ void count_rows(const detail::code_t* codes, const Dims& dims, const Block& b, s
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #define OCCSEG_DIVIDE_PACKED 1
+// Per-thread room for the codes a count_rows_* kernel lists (at least n of them).
+std::uint16_t* code_list(std::size_t n) {
+  thread_local detail::ThreadScratch<std::uint16_t> storage;
+  if (storage.size() < n) storage.resize(n);
+  return storage.data();
+}
+
+// The listed codes, and `same` voxels of the common one, into h (kNoTexture is not counted).
+template <bool Check>
+inline void add_listed(std::uint32_t* h, const std::uint16_t* list, std::size_t len, detail::code_t common,
+                       std::uint64_t same) {
+  for (std::size_t i = 0; i < len; ++i) ++h[list[i]];
+  if (!Check || common != kNoTexture) h[common] += static_cast<std::uint32_t>(same);
+}
+
 // count_rows() without a branch per group of voxels: in each 8 voxels of a row, the block's
 // `common` code is counted with one compare and a popcount, and only the other codes are packed
 // to the front of a vector (lane_pack_internal.hpp) and appended to a list, counted at the end.
@@ -133,9 +148,7 @@ __attribute__((target("avx2,popcnt"))) void count_rows_packed(const detail::code
                                                               const Block& b, std::size_t bins, std::uint32_t* h,
                                                               detail::code_t common) {
   std::fill(h, h + bins, 0u);
-  thread_local detail::ThreadScratch<std::uint16_t> list_storage;
-  if (list_storage.size() < b.volume() + 8) list_storage.resize(b.volume() + 8);
-  std::uint16_t* const list = list_storage.data();
+  std::uint16_t* const list = code_list(b.volume() + 8);
   const __m128i same_code = _mm_set1_epi16(static_cast<short>(common));
   const __m128i none = _mm_set1_epi16(static_cast<short>(kNoTexture));
   std::size_t len = 0;
@@ -160,8 +173,7 @@ __attribute__((target("avx2,popcnt"))) void count_rows_packed(const detail::code
       for (; x < b.hi[0]; ++x)  // blocks cut by the map's edge
         if (!Check || row[x] != kNoTexture) ++h[row[x]];
     }
-  for (std::size_t i = 0; i < len; ++i) ++h[list[i]];
-  if (!Check || common != kNoTexture) h[common] += static_cast<std::uint32_t>(same);
+  add_listed<Check>(h, list, len, common, same);
 }
 
 // count_rows_packed() for two rows at a time with AVX-512 VBMI2: 16 voxels (8 of each row) in
@@ -173,9 +185,7 @@ __attribute__((target("avx512f,avx512bw,avx512vl,avx512vbmi2,popcnt"))) void cou
     const detail::code_t* codes, const Dims& dims, const Block& b, std::size_t bins, std::uint32_t* h,
     detail::code_t common) {
   std::fill(h, h + bins, 0u);
-  thread_local detail::ThreadScratch<std::uint16_t> list_storage;
-  if (list_storage.size() < b.volume() + 32) list_storage.resize(b.volume() + 32);
-  std::uint16_t* const list = list_storage.data();
+  std::uint16_t* const list = code_list(b.volume() + 32);
   const __m256i same_code = _mm256_set1_epi16(static_cast<short>(common));
   const __m256i none = _mm256_set1_epi16(static_cast<short>(kNoTexture));
   std::size_t len = 0;
@@ -224,8 +234,7 @@ __attribute__((target("avx512f,avx512bw,avx512vl,avx512vbmi2,popcnt"))) void cou
     }
     for (; y < b.hi[1]; ++y) tail(codes + nx * (y + ny * z), b.lo[0]);  // an odd row count
   }
-  for (std::size_t i = 0; i < len; ++i) ++h[list[i]];
-  if (!Check || common != kNoTexture) h[common] += static_cast<std::uint32_t>(same);
+  add_listed<Check>(h, list, len, common, same);
 }
 #pragma GCC diagnostic pop
 
