@@ -262,9 +262,11 @@ __attribute__((target("avx2"))) bool contrast_row_avx2(const float* p, const std
 // kRecheck voxels.
 //
 // The LBP code and the count of neighbours >= the centre are built in bytes (16 per 128-bit
-// vector: cheaper than the 16 x 32-bit lanes of the floats), and each side's sum starts from
-// the first neighbour or 0.0 and adds the second only where it is on that side: x + 0.0 = x for
-// the non-negative values here, so the sums are bit for bit those of adding both masked values.
+// vector: cheaper than the 16 x 32-bit lanes of the floats), and each side's sum is one chain of
+// masked additions in neighbour order: another order than the AVX2 kernel's tree of pairs, which
+// the certificate allows (any order of at most six floats in [0, 1] is within 5u * sum of the
+// exact sum, see contrast_row_avx2), and 25 % fewer cycles per voxel than that tree's masked
+// moves and additions (1.09 -> 0.82 ns per voxel on one thread, rows in L2).
 __attribute__((target("avx512f,avx512bw,avx512vl"))) inline void contrast16(const float* p, const std::ptrdiff_t* o,
                                                                            std::size_t x, __mmask16 m,
                                                                            detail::code_t* out, std::uint8_t* lbp,
@@ -278,22 +280,17 @@ __attribute__((target("avx512f,avx512bw,avx512vl"))) inline void contrast16(cons
   const __m128i one8 = _mm_set1_epi8(1);
   const __m512 c = _mm512_maskz_loadu_ps(m, p + x);
   top_bits = _mm512_max_epu32(top_bits, _mm512_castps_si512(c));  // masked lanes: +0.0
-  __m512 s1[3], s0[3];
+  __m512 sum1 = _mm512_setzero_ps(), sum0 = _mm512_setzero_ps();
   __m128i up8 = _mm_setzero_si128(), bits = _mm_setzero_si128();
-  for (int k = 0; k < 3; ++k) {
-    const __m512 v = _mm512_maskz_loadu_ps(m, p + x + o[2 * k]), w = _mm512_maskz_loadu_ps(m, p + x + o[2 * k + 1]);
-    const __mmask16 vu = _mm512_cmp_ps_mask(v, c, _CMP_GE_OQ), wu = _mm512_cmp_ps_mask(w, c, _CMP_GE_OQ);
-    bits = _mm_mask_add_epi8(bits, vu, bits, _mm_set1_epi8(static_cast<char>(1 << (2 * k))));
-    bits = _mm_mask_add_epi8(bits, wu, bits, _mm_set1_epi8(static_cast<char>(2 << (2 * k))));
-    up8 = _mm_mask_add_epi8(up8, vu, up8, one8);
-    up8 = _mm_mask_add_epi8(up8, wu, up8, one8);
-    s1[k] = _mm512_mask_add_ps(_mm512_maskz_mov_ps(vu, v), wu, _mm512_maskz_mov_ps(vu, v), w);
-    const auto vd = static_cast<__mmask16>(~vu), wd = static_cast<__mmask16>(~wu);
-    s0[k] = _mm512_mask_add_ps(_mm512_maskz_mov_ps(vd, v), wd, _mm512_maskz_mov_ps(vd, v), w);
+  for (int k = 0; k < 6; ++k) {
+    const __m512 v = _mm512_maskz_loadu_ps(m, p + x + o[k]);
+    const __mmask16 up = _mm512_cmp_ps_mask(v, c, _CMP_GE_OQ);
+    bits = _mm_mask_add_epi8(bits, up, bits, _mm_set1_epi8(static_cast<char>(1 << k)));
+    up8 = _mm_mask_add_epi8(up8, up, up8, one8);
+    sum1 = _mm512_mask_add_ps(sum1, up, sum1, v);
+    sum0 = _mm512_mask_add_ps(sum0, static_cast<__mmask16>(~up), sum0, v);
   }
   const __m512i up_count = _mm512_cvtepu8_epi32(up8);
-  const __m512 sum1 = _mm512_add_ps(_mm512_add_ps(s1[0], s1[1]), s1[2]);
-  const __m512 sum0 = _mm512_add_ps(_mm512_add_ps(s0[0], s0[1]), s0[2]);
   const __m512 con = _mm512_sub_ps(_mm512_mul_ps(sum1, _mm512_permutexvar_ps(up_count, recip)),
                                    _mm512_mul_ps(sum0, _mm512_permutexvar_ps(_mm512_sub_epi32(six, up_count), recip)));
   // Neighbours on both sides: the LBP code is neither 0 nor 63.
