@@ -308,12 +308,13 @@ __attribute__((target("avx512f,avx512bw,avx512vl"))) inline void contrast16(cons
   if (lbp) _mm_mask_storeu_epi8(lbp + x, m, bits);
 }
 
-// contrast_row_avx2 for 16 voxels per step in AVX-512 (F only): the same operations in the same
-// order on each lane, so the same steps, LBP codes and check; comparisons go to mask registers,
-// which removes the and/andnot selections and the register spills of the AVX2 loop (about 105
-// instructions per 8 voxels there). The last n % 16 voxels are one masked step (a scalar tail
-// cost a row of 318 as much as 40 of its voxels). `any_recheck` is set when some voxel is
-// kRecheck.
+// contrast_row_avx2 for 16 voxels per step in AVX-512 (F, BW, VL): the same certificate and
+// check, the sums in another order (contrast16), so a float contrast may differ in its last bits
+// and a voxel be rechecked by one kernel and not the other, but the steps are texture_unit()'s
+// in both, and the LBP codes the same; comparisons go to mask registers, which removes the
+// and/andnot selections and the register spills of the AVX2 loop (about 105 instructions per 8
+// voxels there). The last n % 16 voxels are one masked step (a scalar tail cost a row of 318 as
+// much as 40 of its voxels). `any_recheck` is set when some voxel is kRecheck.
 __attribute__((target("avx512f,avx512bw,avx512vl"))) bool contrast_row_avx512(const float* p, const std::ptrdiff_t* off, std::size_t n,
                                                             detail::code_t* out, std::uint8_t* lbp, bool& any_recheck) {
   const std::ptrdiff_t o[6] = {off[0], off[1], off[2], off[3], off[4], off[5]};  // see contrast_row_avx2
