@@ -84,7 +84,9 @@ __attribute__((target("avx2"))) void add_cells_avx2(const float* v, double* sums
 // instead of 68 instructions per eight cells, the same additions in the same order. (GCC 12 warns
 // inside its own AVX-512 intrinsics, whose pass-through operands are deliberately undefined.)
 #pragma GCC diagnostic push
+#ifndef __clang__  // (a GCC warning; Clang does not know it)
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 __attribute__((target("avx512f"))) void add_cells_avx512(const float* v, double* sums, std::size_t cells) {
   __m512i ia[4], ib[4];  // pair q: voxels 2q (lanes 0-7) and 2q + 1 (lanes 8-15)
   for (int q = 0; q < 4; ++q) {

@@ -179,7 +179,9 @@ __attribute__((target("avx2,popcnt"))) void count_rows_packed(const detail::code
 // count_rows_packed() for two rows at a time with AVX-512 VBMI2: 16 voxels (8 of each row) in
 // one 256-bit vector, the codes other than `common` packed by one compress instruction.
 #pragma GCC diagnostic push
+#ifndef __clang__  // (a GCC warning; Clang does not know it)
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC 12 inside its own AVX-512 intrinsics
+#endif
 template <bool Check>
 __attribute__((target("avx512f,avx512bw,avx512vl,avx512vbmi2,popcnt"))) void count_rows_compress(
     const detail::code_t* codes, const Dims& dims, const Block& b, std::size_t bins, std::uint32_t* h,

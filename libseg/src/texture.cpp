@@ -255,7 +255,9 @@ __attribute__((target("avx2"))) bool contrast_row_avx2(const float* p, const std
 // (GCC 12 warns inside its own AVX-512 intrinsics, whose pass-through operands are deliberately
 // undefined.)
 #pragma GCC diagnostic push
+#ifndef __clang__  // (a GCC warning; Clang does not know it)
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 // The voxels x .. x + 15 of the row at p where `m` has their bits (the others are not read or
 // written); `top_bits` keeps the largest bit pattern of the centres seen (as unsigned integers:
 // [+0, 1] is 0 .. 0x3F800000, so anything above is outside it, NaN or -0.0), `rc` gathers the
@@ -469,7 +471,9 @@ __attribute__((target("avx2"))) void count_steps_avx2(const detail::code_t* v, s
 // count_steps_avx2() with the non-zero steps of 32 voxels at a time packed by one compress
 // instruction (AVX-512 VBMI2) instead of a table of shuffles per 8; `list` needs room for n + 32.
 #pragma GCC diagnostic push
+#ifndef __clang__  // (a GCC warning; Clang does not know it)
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // see contrast_row_avx512
+#endif
 __attribute__((target("avx512f,avx512bw,avx512vl,avx512vbmi2"))) void count_steps_avx512(const detail::code_t* v, std::size_t n,
                                                                                std::uint64_t* h, std::uint16_t* list) {
   std::size_t len = 0;
