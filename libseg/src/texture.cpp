@@ -317,8 +317,10 @@ __attribute__((target("avx512f,avx512bw,avx512vl"))) inline void contrast16(cons
 // and/andnot selections and the register spills of the AVX2 loop (about 105 instructions per 8
 // voxels there). The last n % 16 voxels are one masked step (a scalar tail cost a row of 318 as
 // much as 40 of its voxels). `any_recheck` is set when some voxel is kRecheck.
-__attribute__((target("avx512f,avx512bw,avx512vl"))) bool contrast_row_avx512(const float* p, const std::ptrdiff_t* off, std::size_t n,
-                                                            detail::code_t* out, std::uint8_t* lbp, bool& any_recheck) {
+__attribute__((target("avx512f,avx512bw,avx512vl"))) bool contrast_row_avx512(const float* p,
+                                                                               const std::ptrdiff_t* off, std::size_t n,
+                                                                               detail::code_t* out, std::uint8_t* lbp,
+                                                                               bool& any_recheck) {
   const std::ptrdiff_t o[6] = {off[0], off[1], off[2], off[3], off[4], off[5]};  // see contrast_row_avx2
   __m512i top_bits = _mm512_setzero_si512();
   __mmask16 rc = 0;
