@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <optional>
 #include <utility>
 
 #if defined(__x86_64__) && defined(__GNUC__)
@@ -344,12 +345,13 @@ bool create_by_rows(const Grid& grid, const std::vector<Block>& blocks, const Pa
 // whose states are all written here, in parallel.
 template <class V>
 V create(const Grid& grid, const std::vector<Block>& blocks, const Params& params, std::uint8_t* own,
-         const detail::CellRows* summed = nullptr, detail::GrowthRows* growth = nullptr) {
+         detail::CellRows* summed = nullptr, detail::GrowthRows* growth = nullptr) {
   V states;
   resize_huge(states, grid.dims.count());
   float lo = 0, hi = 0;
   if (own) detail::float_bounds(params.free_below, params.occupied_above, lo, hi);
-  detail::CellRows rows = summed ? *summed : detail::CellRows(grid, own, lo, hi);
+  std::optional<detail::CellRows> fresh;  // the rows are summed here unless they were (not copied)
+  detail::CellRows& rows = summed ? *summed : fresh.emplace(grid, own, lo, hi);
   if (!create_by_rows(grid, blocks, params, rows, summed != nullptr, states.data(), nullptr, growth))
     create_by_blocks(grid, blocks, params, own, lo, hi, states.data());
   return states;
@@ -373,7 +375,7 @@ std::vector<std::uint8_t> create_segments(const Grid& grid, const std::vector<Bl
 
 UninitVector<std::uint8_t> detail::create_segments_and_own_states(const Grid& grid, const std::vector<Block>& blocks,
                                                                   const Params& params, std::uint8_t* own,
-                                                                  const CellRows* summed, GrowthRows* growth) {
+                                                                  CellRows* summed, GrowthRows* growth) {
   return create<UninitVector<std::uint8_t>>(grid, blocks, params, own, summed, growth);
 }
 

@@ -85,7 +85,7 @@ class CellRows {
 struct GrowthRows;
 UninitVector<std::uint8_t> create_segments_and_own_states(const Grid& grid, const std::vector<Block>& blocks,
                                                           const Params& params, std::uint8_t* own,
-                                                          const CellRows* summed = nullptr,
+                                                          CellRows* summed = nullptr,
                                                           GrowthRows* growth = nullptr);
 
 // What the unknown growth packs from the states before it starts, written by the creation as it
