@@ -96,7 +96,7 @@ UninitVector<std::uint8_t> create_segments_and_own_states(const Grid& grid, cons
 struct GrowthRows {
   std::uint8_t* scratch = nullptr;              // 8-byte aligned, grow_unknown_scratch_bytes()
   const std::uint64_t* unknown_bits = nullptr;  // CellRows' bits of the own states' unknown voxels
-  std::uint8_t* occupied_rows = nullptr;        // one byte per row
+  std::uint8_t* occupied_rows = nullptr;        // one byte per row (refine() fills it if not)
   bool filled = false;                          // set by the creation when it wrote them
 };
 // For tests: the block means as creation sums them when the blocks tile the map on the lattice of

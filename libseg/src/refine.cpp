@@ -343,8 +343,8 @@ void detail::refine(std::uint8_t* st, const std::uint8_t* own, const Dims& d, co
   // are flagged for the sweeps (the growth never makes or unmakes one), which then need not read
   // the map once more (0.4 ms).
   const bool packed = growth && growth->filled && growth->scratch == scratch;
-  std::vector<std::uint8_t> own_flags(packed ? 0 : d.ny * d.nz);
-  std::uint8_t* const occupied_rows = packed ? growth->occupied_rows : own_flags.data();
+  std::vector<std::uint8_t> own_flags(growth ? 0 : d.ny * d.nz);  // (growth has room for them)
+  std::uint8_t* const occupied_rows = growth ? growth->occupied_rows : own_flags.data();
   grow_unknown(st, own, d, params.threads, scratch, scratch_bytes, unknown_bits, occupied_rows, packed);
   run_sweeps(st, own, d, params.threads, lookahead_of(params), boundary_sweeps(params), occupied_rows);
 }
