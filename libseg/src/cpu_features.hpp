@@ -27,6 +27,16 @@ inline bool cpu_has_avx512() {
 #endif
 }
 
+// AVX-512 VBMI (permutes of bytes) besides AVX-512F, BW and VL.
+inline bool cpu_has_avx512vbmi() {
+#if defined(__x86_64__) && defined(__GNUC__)
+  static const bool yes = cpu_has_avx512() && __builtin_cpu_supports("avx512vbmi");
+  return yes;
+#else
+  return false;
+#endif
+}
+
 // AVX-512 VBMI2 (compress of 16-bit lanes) besides AVX-512F and BW.
 inline bool cpu_has_avx512vbmi2() {
 #if defined(__x86_64__) && defined(__GNUC__)

@@ -154,7 +154,7 @@ TEST(Create, RowSumsAreMeanOccupancyBitForBit) {
     }
     ASSERT_GT(reordered_differs, blocks.size() / 3) << "map " << k << ": the values do not tell orders apart";
     // Every row kernel the processor has (compiler, AVX2, AVX-512), on 1 to 3 threads.
-    for (int kernel = 0; kernel <= 2; ++kernel)
+    for (int kernel = 0; kernel <= static_cast<int>(detail::TextureKernel::fastest); ++kernel)
       for (int threads : {1, 2, 3}) {
         detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
         const std::vector<double> means = detail::block_means_by_rows(g, blocks, threads);
@@ -216,7 +216,7 @@ TEST(Create, TextureFirstPassAddsTheRowsAsCreationDoes) {
     for (std::size_t z = 0; z < g.dims.nz; ++z)
       for (std::size_t y = 0; y < g.dims.ny; ++y) want.add_row(y, z);
     ASSERT_EQ(want_own, own_states(g, Params())) << "map " << k;
-    for (int kernel = 0; kernel <= 2; ++kernel)  // the texture's row kernels, and the cells' with them
+    for (int kernel = 0; kernel <= static_cast<int>(detail::TextureKernel::fastest); ++kernel)  // the texture's row kernels, and the cells' with them
       for (int threads : {1, 2, 3, 5}) {
         std::vector<std::uint8_t> own(g.p.size(), 0xEE), lbp(g.p.size());
         std::vector<std::uint16_t> codes(g.p.size());

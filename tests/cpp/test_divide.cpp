@@ -105,7 +105,7 @@ TEST(Divide, CountCodesMatchesOneByOneCounting) {
   }
   for (std::uint32_t x = 0; x < 12; x += 3) t.codes[x + d.nx] = kNoTexture;  // blocks whose first voxel has none
   std::size_t checked = 0, uniform_rows = 0, first_without_texture = 0;
-  for (int kernel = 0; kernel < 3; ++kernel) {
+  for (int kernel = 0; kernel <= static_cast<int>(detail::TextureKernel::fastest); ++kernel) {
     detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
     for (std::uint32_t x0 = 0; x0 < 12; ++x0)
       for (std::uint32_t w = 1; x0 + w <= d.nx; w += w < 9 ? 1 : 5)  // 8: the four-row path

@@ -78,7 +78,7 @@ const Case kCases[] = {
 TEST(Reference, TextureCodesMatch) {
   // Every contrast kernel: the compiler-vectorised one and the hand-written AVX2 and AVX-512 ones
   // (each where the processor has it; otherwise the next slower one runs again).
-  for (int vector_kernel = 0; vector_kernel < 3; ++vector_kernel) {
+  for (int vector_kernel = 0; vector_kernel <= static_cast<int>(detail::TextureKernel::fastest); ++vector_kernel) {
     detail::set_texture_kernel(static_cast<detail::TextureKernel>(vector_kernel));
     for (const Case& c : kCases) {
       const Grid g = test::random_map(c.dims, c.seed, c.noise);
@@ -162,7 +162,7 @@ TEST(Reference, DivisionMatchesWithEveryCountingKernel) {
     without_flat += flat == 0;
     for (Params p : {Params::paper(), Params::defaults()}) {
       const std::vector<Block> want = reference::divide(g, t, p);
-      for (int kernel = 0; kernel < 3; ++kernel) {
+      for (int kernel = 0; kernel <= static_cast<int>(detail::TextureKernel::fastest); ++kernel) {
         detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
         for (int threads : {1, 2}) {
           p.threads = threads;
@@ -236,7 +236,7 @@ TEST(Reference, ContrastsOnStepBoundariesMatch) {
     const int nudge = r.below(5);
     v = nudge == 0 ? 0.5f : (nudge == 1 ? base : (nudge == 2 ? std::nextafter(base, 1.0f) : (nudge == 3 ? std::nextafter(base, 0.0f) : 0.75f)));
   }
-  for (int vector_kernel = 0; vector_kernel < 3; ++vector_kernel) {
+  for (int vector_kernel = 0; vector_kernel <= static_cast<int>(detail::TextureKernel::fastest); ++vector_kernel) {
     detail::set_texture_kernel(static_cast<detail::TextureKernel>(vector_kernel));
     for (int bins : {8, 64})
       EXPECT_EQ(compute_texture(g, bins, 2).codes, reference::texture(g, bins).codes) << bins << " " << vector_kernel;

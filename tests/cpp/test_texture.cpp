@@ -104,7 +104,7 @@ TEST(Texture, BadValuesAreErrorsNamingTheVoxel) {
                                   {1, 1, 1}, {12, 3, 2}, {16, 4, 4}, {17, 2, 3}, {19, 5, 1}, {20, 2, 4}};
   constexpr int kSpots = sizeof spots / sizeof spots[0];
   int checked = 0;
-  for (int kernel = 0; kernel < 3; ++kernel) {
+  for (int kernel = 0; kernel <= static_cast<int>(detail::TextureKernel::fastest); ++kernel) {
     detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
     for (float v : bad)
       for (const auto& s : spots)
@@ -126,7 +126,7 @@ TEST(Texture, BadValuesAreErrorsNamingTheVoxel) {
         }
   }
   detail::set_texture_kernel(detail::TextureKernel::fastest);
-  EXPECT_EQ(checked, 3 * 6 * kSpots * 3);
+  EXPECT_EQ(checked, (static_cast<int>(detail::TextureKernel::fastest) + 1) * 6 * kSpots * 3);
 }
 
 // The edges of [0, 1] are valid wherever they sit, -0.0 (which compares equal to 0) and
@@ -139,7 +139,7 @@ TEST(Texture, EdgeValuesAreAccepted) {
   const float edge[] = {-0.0f, 0.0f, 1.0f, 1e-40f, std::nextafter(1.0f, 0.0f)};
   for (std::size_t i = 0; i < g.p.size(); ++i) g.p[i] = i % 3 ? 0.1f + 0.8f * float(i % 7) / 6 : edge[i % 5];
   std::vector<std::uint16_t> first;
-  for (int kernel = 0; kernel < 3; ++kernel) {
+  for (int kernel = 0; kernel <= static_cast<int>(detail::TextureKernel::fastest); ++kernel) {
     detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
     for (int threads : {1, 2}) {
       const TextureMap t = compute_texture(g, 8, threads);

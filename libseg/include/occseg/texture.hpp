@@ -62,7 +62,9 @@ TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads);
 
 namespace detail {
 // The contrast kernels of the texture's first pass, slowest first. All give identical codes.
-enum class TextureKernel { compiler = 0, avx2 = 1, avx512 = 2, fastest = 2 };
+// avx512vbmi is the AVX-512 kernel with its count of neighbours looked up by a byte permute
+// (AVX-512 VBMI), where the processor has it.
+enum class TextureKernel { compiler = 0, avx2 = 1, avx512 = 2, avx512vbmi = 3, fastest = 3 };
 // For tests and benchmarks: compute_texture uses the fastest kernel up to `k` that the processor
 // has (the compiler-vectorised one always; the hand-written AVX2 and AVX-512 ones where the
 // processor has them), and so do the creation's cell sums (which segment() has the texture's
