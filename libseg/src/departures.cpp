@@ -168,7 +168,8 @@ __attribute__((target("avx2"))) inline __m256i at32(const std::uint8_t* p, std::
   return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + x));
 }
 
-// rule() on voxels x .. x + 31 of a row, in place; returns the candidates for seeds (0xFF).
+// rule() on voxels x .. x + 31 of a row, in place; returns the seeds of the gap flood among them
+// (0xFF: a gap voxel left unknown with an occupied neighbour, as rules_row()'s callers check).
 __attribute__((target("avx2"))) inline __m256i rules_step_avx2(std::uint8_t* st, const std::uint8_t* own,
                                                                const word_t* region, const std::uint8_t* ym,
                                                                const std::uint8_t* yp, const std::uint8_t* zm,
@@ -185,32 +186,43 @@ __attribute__((target("avx2"))) inline __m256i rules_step_avx2(std::uint8_t* st,
   const __m256i own_unknown = _mm256_cmpeq_epi8(o, unk);
   const __m256i res = _mm256_blendv_epi8(o, _mm256_blendv_epi8(gap, unk, reg), own_unknown);
   _mm256_storeu_si256(reinterpret_cast<__m256i*>(st + x), res);
-  return _mm256_andnot_si256(reg, _mm256_and_si256(own_unknown, _mm256_cmpeq_epi8(res, unk)));
+  return _mm256_andnot_si256(reg, _mm256_and_si256(_mm256_and_si256(own_unknown, touches), _mm256_cmpeq_epi8(res, unk)));
 }
 
 // rules_row() for rows of at least 34 voxels, 32 voxels per step in hand-written AVX2, with the
-// region read from its bit row (no byte row unpacked first) and the seed flag gathered in the
-// same loop; the last step overlaps the one before instead of a scalar tail (the rules are
-// idempotent: a second application to a result gives the result). GCC's vectorised rules_row
-// spent two thirds of its instructions on a row of 320 in its scalar tails and second pass.
-__attribute__((target("avx2"))) bool rules_row_avx2(std::uint8_t* st, const std::uint8_t* own, const word_t* region,
+// region read from its bit row (no byte row unpacked first); the last step overlaps the one
+// before instead of a scalar tail (the rules are idempotent: a second application to a result
+// gives the result). GCC's vectorised rules_row spent two thirds of its instructions on a row of
+// 320 in its scalar tails and second pass. The seeds of the gap flood come out of the same
+// steps, exactly (`first` + x for each, appended to `seeds` in x order): rules_row()'s superset
+// sent most rows of the scene through a scalar search (0.6 of the rules' 2.2 ms).
+__attribute__((target("avx2"))) void rules_row_avx2(std::uint8_t* st, const std::uint8_t* own, const word_t* region,
                                                     const std::uint8_t* ym, const std::uint8_t* yp,
-                                                    const std::uint8_t* zm, const std::uint8_t* zp, std::size_t n) {
-  __m256i any = _mm256_setzero_si256();
-  std::size_t x = 1;
-  for (; x + 32 <= n - 1; x += 32) any = _mm256_or_si256(any, rules_step_avx2(st, own, region, ym, yp, zm, zp, x));
-  if (x < n - 1) any = _mm256_or_si256(any, rules_step_avx2(st, own, region, ym, yp, zm, zp, n - 1 - 32));
+                                                    const std::uint8_t* zm, const std::uint8_t* zp, std::size_t n,
+                                                    std::size_t first, std::vector<std::size_t>& seeds) {
   const auto reg_at = [&](std::size_t i) { return static_cast<std::uint8_t>((region[i / 64] >> (i % 64)) & 1); };
   auto across = [&](std::size_t i) {
     return (ym[i] == kOccupied) | (yp[i] == kOccupied) | (zm[i] == kOccupied) | (zp[i] == kOccupied);
   };
   const bool t0 = (own[1] == kOccupied) | across(0), tn = (own[n - 2] == kOccupied) | across(n - 1);
-  st[0] = rule(st[0], own[0], reg_at(0), t0);
-  st[n - 1] = rule(st[n - 1], own[n - 1], reg_at(n - 1), tn);
   auto seed = [&](std::size_t i, bool t) {
     return (own[i] == kUnknown) & (reg_at(i) == 0) & t & (st[i] == kUnknown);
   };
-  return !_mm256_testz_si256(any, any) || seed(0, t0) || seed(n - 1, tn);
+  // voxel x of the step at x0 is a seed where bit x - x0 of m is set; bits below `from` - x0 are
+  // voxels an earlier step reported already
+  const auto add = [&](std::size_t x0, std::uint32_t m, std::size_t from) {
+    if (from > x0) m &= ~0u << (from - x0);
+    for (; m; m &= m - 1) seeds.push_back(first + x0 + static_cast<std::size_t>(__builtin_ctz(m)));
+  };
+  st[0] = rule(st[0], own[0], reg_at(0), t0);
+  if (seed(0, t0)) seeds.push_back(first);
+  std::size_t x = 1;
+  for (; x + 32 <= n - 1; x += 32)
+    add(x, static_cast<std::uint32_t>(_mm256_movemask_epi8(rules_step_avx2(st, own, region, ym, yp, zm, zp, x))), x);
+  if (x < n - 1)
+    add(n - 1 - 32, static_cast<std::uint32_t>(_mm256_movemask_epi8(rules_step_avx2(st, own, region, ym, yp, zm, zp, n - 1 - 32))), x);
+  st[n - 1] = rule(st[n - 1], own[n - 1], reg_at(n - 1), tn);
+  if (seed(n - 1, tn)) seeds.push_back(first + n - 1);
 }
 #endif
 
@@ -332,8 +344,9 @@ void detail::apply_voxel_rules(std::uint8_t* st, const std::uint8_t* own, const 
   const BitMask region = region_bits(own, d, params, scratch, scratch_bytes, unknown_bits);
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, sz = nx * ny;
   const std::vector<std::uint8_t> none(nx, kFree);  // outside the map: no occupied neighbour
-  // Reads only own states and each voxel's own entry of st, so rows are independent. Rows that
-  // hold seeds of the gap flood are searched for them on the way, slab by slab.
+  // Reads only own states and each voxel's own entry of st, so rows are independent. The seeds of
+  // the gap flood are gathered on the way, slab by slab (the AVX2 rows find them exactly; the
+  // others flag rows that may hold some, which are then searched).
   std::vector<std::size_t> seeds;
   std::mutex seeds_mutex;
 #ifdef OCCSEG_RULES_AVX2
@@ -349,17 +362,14 @@ void detail::apply_voxel_rules(std::uint8_t* st, const std::uint8_t* own, const 
         const word_t* const bits = region.row(y + ny * z);
         const std::uint8_t *ym = y > 0 ? o - nx : none.data(), *yp = y + 1 < ny ? o + nx : none.data();
         const std::uint8_t *zm = z > 0 ? o - sz : none.data(), *zp = z + 1 < nz ? o + sz : none.data();
-        bool seeds_here;
 #ifdef OCCSEG_RULES_AVX2
         if (avx2) {
-          seeds_here = rules_row_avx2(st + i, o, bits, ym, yp, zm, zp, nx);
-        } else
-#endif
-        {
-          unpack_half(bits, o, nx, reg.data());
-          seeds_here = rules_row(st + i, o, reg.data(), ym, yp, zm, zp, nx);
+          rules_row_avx2(st + i, o, bits, ym, yp, zm, zp, nx, i, mine);
+          continue;
         }
-        if (!seeds_here) continue;
+#endif
+        unpack_half(bits, o, nx, reg.data());
+        if (!rules_row(st + i, o, reg.data(), ym, yp, zm, zp, nx)) continue;
         for (std::size_t x = 0; x < nx; ++x) {
           const std::size_t j = i + x;
           // (the region bit alone: it matters only where the own state is unknown)
