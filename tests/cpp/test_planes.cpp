@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <functional>
 #include <set>
 
@@ -125,9 +126,24 @@ TEST(Planes, CostIsTheDocumentedSumOnBothKernels) {
       }
       const double want = (lane[0] + lane[1]) + (lane[2] + lane[3]);
       differs_from_serial += want != serial;
+      // Scored beside another plane (the search scores draws in pairs): the same bits, or with a
+      // bound, a sum at or above it once the cost reaches it.
+      Plane other = pl;
+      other.d = pl.d - 2.5;
+      const double other_cost = detail::msac_cost(pts, other);
       for (bool vector : {true, false}) {
         detail::set_vector_planes(vector);
         EXPECT_EQ(detail::msac_cost(pts, pl), want) << n << " points, plane " << k << ", vector " << vector;
+        double a = 0, b = 0;
+        detail::msac_cost_pair(pts, pl, other, std::numeric_limits<double>::infinity(), a, b);
+        EXPECT_EQ(a, want) << n << " points, plane " << k << ", vector " << vector;
+        EXPECT_EQ(b, other_cost) << n << " points, plane " << k << ", vector " << vector;
+        detail::msac_cost_pair(pts, other, pl, std::numeric_limits<double>::infinity(), b, a);
+        EXPECT_EQ(a, want) << n << " points, plane " << k << ", vector " << vector;
+        const double stop = 0.5 * (want + other_cost);  // one of them stops early (unless equal)
+        detail::msac_cost_pair(pts, pl, other, stop, a, b);
+        EXPECT_TRUE(want < stop ? a == want : a >= stop) << n << " points, plane " << k << ", vector " << vector;
+        EXPECT_TRUE(other_cost < stop ? b == other_cost : b >= stop) << n << " points, plane " << k;
       }
       detail::set_vector_planes(true);
     }
@@ -191,10 +207,12 @@ TEST(Planes, SeveralCandidatesSplitTheSameForAnyThreadCount) {
   ASSERT_EQ(one.segments.size(), one.before + 3) << "a box split off each shelf";
   for (int k = 0; k < 3; ++k)
     EXPECT_NE(one.at(20 * k + 7, 7, 3 + 6 * k), one.at(20 * k + 1, 1, 2 + 6 * k)) << "shelf " << k;
-  for (int threads : {2, 3}) {
+  for (int threads : {2, 3, -1}) {  // -1: one thread, the scalar code (costs, box scans)
     Scene s(d, shelves);
     label_components(s.states, s.grid, s.labels, s.segments, 1, true);
-    split_support_planes(s.grid, s.labels, s.segments, 200, true, threads);
+    detail::set_vector_planes(threads > 0);
+    split_support_planes(s.grid, s.labels, s.segments, 200, true, std::max(threads, 1));
+    detail::set_vector_planes(true);
     EXPECT_EQ(s.labels, one.labels) << threads << " threads";
     ASSERT_EQ(s.segments.size(), one.segments.size());
     for (std::size_t i = 0; i < s.segments.size(); ++i) {

@@ -58,13 +58,18 @@ void split_support_planes(const Grid& grid, LabelArray& labels, std::vector<Segm
                           std::size_t min_plane, bool occupied26, int threads = 1);
 
 namespace detail {
-// For tests and benchmarks: false scores candidate planes with the scalar code even where the
-// processor has AVX2 (both give identical costs). Process-wide.
+// For tests and benchmarks: false scores candidate planes and lists the voxels of a segment's box
+// with the scalar code even where the processor has AVX2 (both give identical results).
+// Process-wide.
 void set_vector_planes(bool enabled);
 // The MSAC cost of `plane` on `points` as the plane search computes it: the squared distances,
 // capped at kPlaneInlierDistance^2, point i's added to lane i % 4 in point order, the cost
 // (l0 + l1) + (l2 + l3). For tests.
 double msac_cost(const std::vector<std::array<double, 3>>& points, const Plane& plane);
+// msac_cost() of two planes as the search scores them, side by side: each must be msac_cost()'s
+// bit for bit, or, once its sum reaches `stop`, some sum at or above `stop`. For tests.
+void msac_cost_pair(const std::vector<std::array<double, 3>>& points, const Plane& a, const Plane& b, double stop,
+                    double& cost_a, double& cost_b);
 }  // namespace detail
 
 }  // namespace occseg
