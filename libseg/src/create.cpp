@@ -137,12 +137,87 @@ __attribute__((target("avx2"))) void own_states_avx2(const float* p, std::size_t
 }
 #endif
 
+// OwnBits of the row of n values at p: u (lo <= p <= hi: unknown) and o (p > hi: occupied), the
+// words cleared first, bits past n 0.
+void own_bits_of(const float* p, std::size_t n, float lo, float hi, word_t* u, word_t* o) {
+  for (std::size_t i = 0; i < (n + 63) / 64; ++i) u[i] = o[i] = 0;
+  for (std::size_t x = 0; x < n; ++x) {
+    u[x / 64] |= static_cast<std::uint64_t>(!(p[x] < lo) && !(p[x] > hi)) << (x % 64);
+    o[x / 64] |= static_cast<std::uint64_t>(p[x] > hi) << (x % 64);
+  }
+}
+
+#ifdef OCCSEG_CREATE_AVX2
+// own_bits_of() 64 voxels per step (8 compares of 8 each; the scalar one takes the rest). NaN
+// counts as unknown, as in own_states_of() (it never gets this far: the map is rejected).
+__attribute__((target("avx2"))) void own_bits_avx2(const float* p, std::size_t n, float lo, float hi, word_t* u,
+                                                   word_t* o) {
+  const __m256 l = _mm256_set1_ps(lo), h = _mm256_set1_ps(hi);
+  std::size_t i = 0;
+  for (; i + 64 <= n; i += 64) {
+    std::uint64_t uw = 0, ow = 0;
+    for (int j = 0; j < 8; ++j) {
+      const __m256 a = _mm256_loadu_ps(p + i + 8 * j);
+      const __m256 in = _mm256_and_ps(_mm256_cmp_ps(a, l, _CMP_NLT_UQ), _mm256_cmp_ps(a, h, _CMP_NGT_UQ));
+      uw |= static_cast<std::uint64_t>(static_cast<unsigned>(_mm256_movemask_ps(in))) << (8 * j);
+      ow |= static_cast<std::uint64_t>(static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(a, h, _CMP_GT_OQ))))
+            << (8 * j);
+    }
+    u[i / 64] = uw;
+    o[i / 64] = ow;
+  }
+  if (i < n) own_bits_of(p + i, n - i, lo, hi, u + i / 64, o + i / 64);
+}
+
+// own_bits_avx2() with AVX-512 compares into mask registers, 16 voxels each.
+__attribute__((target("avx512f"))) void own_bits_avx512(const float* p, std::size_t n, float lo, float hi, word_t* u,
+                                                         word_t* o) {
+  const __m512 l = _mm512_set1_ps(lo), h = _mm512_set1_ps(hi);
+  std::size_t i = 0;
+  for (; i + 64 <= n; i += 64) {
+    std::uint64_t uw = 0, ow = 0;
+    for (int j = 0; j < 4; ++j) {
+      const __m512 a = _mm512_loadu_ps(p + i + 16 * j);
+      const __mmask16 in = _mm512_mask_cmp_ps_mask(_mm512_cmp_ps_mask(a, l, _CMP_NLT_UQ), a, h, _CMP_NGT_UQ);
+      uw |= static_cast<std::uint64_t>(in) << (16 * j);
+      ow |= static_cast<std::uint64_t>(_mm512_cmp_ps_mask(a, h, _CMP_GT_OQ)) << (16 * j);
+    }
+    u[i / 64] = uw;
+    o[i / 64] = ow;
+  }
+  if (i < n) own_bits_of(p + i, n - i, lo, hi, u + i / 64, o + i / 64);
+}
+#endif
+
 }  // namespace
 
-detail::CellRows::CellRows(const Grid& grid, std::uint8_t* own, float lo, float hi, std::uint64_t* unknown_bits)
+detail::OwnBitsStore detail::pack_own_bits(const std::uint8_t* own, const Dims& d, int threads) {
+  OwnBitsStore s;
+  const std::size_t words = (d.nx + 63) / 64;
+  s.unknown.resize(d.ny * d.nz * words);
+  s.occupied.resize(d.ny * d.nz * words);
+  pack_own_bits(own, d, threads, s.unknown.data(), s.occupied.data());
+  s.bits = OwnBits{s.unknown.data(), s.occupied.data(), words};
+  return s;
+}
+
+void detail::pack_own_bits(const std::uint8_t* own, const Dims& d, int threads, std::uint64_t* unknown,
+                           std::uint64_t* occupied) {
+  const std::size_t words = (d.nx + 63) / 64;
+  parallel_for(d.ny * d.nz, threads, [&](std::size_t r0, std::size_t r1) {
+    for (std::size_t r = r0; r < r1; ++r) {
+      pack_equal(own + r * d.nx, d.nx, static_cast<std::uint8_t>(State::unknown), reinterpret_cast<word_t*>(unknown) + r * words);
+      pack_equal(own + r * d.nx, d.nx, static_cast<std::uint8_t>(State::occupied), reinterpret_cast<word_t*>(occupied) + r * words);
+    }
+  });
+}
+
+detail::CellRows::CellRows(const Grid& grid, std::uint8_t* own, float lo, float hi, std::uint64_t* unknown_bits,
+                           std::uint64_t* occupied_bits)
     : grid_(&grid),
       own_(own),
-      unknown_(own ? unknown_bits : nullptr),
+      unknown_(unknown_bits),
+      occupied_(occupied_bits),
       lo_(lo),
       hi_(hi),
       ncx_((grid.dims.nx + kMeanCell - 1) / kMeanCell),
@@ -156,7 +231,17 @@ void detail::CellRows::add_row(std::size_t y, std::size_t z) {
   static_assert(kMeanCell == 8, "the row loop below adds eight voxels per cell");
   const std::size_t nx = grid_->dims.nx, i0 = nx * (y + grid_->dims.ny * z);
   const float* const row = grid_->p.data() + i0;
-  if (own_) {
+  if (!own_ && unknown_ && occupied_) {  // the own states as bits only, straight from the values
+    const std::size_t w = (nx + 63) / 64 * (y + grid_->dims.ny * z);
+    word_t* const u = reinterpret_cast<word_t*>(unknown_) + w;
+    word_t* const o = reinterpret_cast<word_t*>(occupied_) + w;
+#ifdef OCCSEG_CREATE_AVX2
+    if (avx512_) own_bits_avx512(row, nx, lo_, hi_, u, o);
+    else if (avx2_) own_bits_avx2(row, nx, lo_, hi_, u, o);
+    else
+#endif
+      own_bits_of(row, nx, lo_, hi_, u, o);
+  } else if (own_) {
 #ifdef OCCSEG_CREATE_AVX2
     if (avx2_) own_states_avx2(row, nx, lo_, hi_, own_ + i0);
     else

@@ -1,7 +1,6 @@
 #include "occseg/departures.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cstdint>
 #include <mutex>
 
@@ -11,6 +10,7 @@
 #include "huge_pages.hpp"
 #include "own_states_internal.hpp"
 #include "occseg/refine.hpp"
+#include "occseg/texture.hpp"
 
 #ifdef __SSE2__
 #include <emmintrin.h>
@@ -123,116 +123,118 @@ void unpack_half(const word_t* bits, const std::uint8_t* own, std::size_t nx, st
   for (; x < nx; ++x) out[x] = static_cast<std::uint8_t>(((bits[x / 64] >> (x % 64)) & 1) & (own[x] == kUnknown));
 }
 
-// The per-voxel rules on one row of voxels (x in [0, n)); xm/xp, ym/yp, zm/zp are the own states
-// of the neighbours, with `none` (all free) rows standing in outside the map.
+// The per-voxel rules on one voxel: its state s, own state o, region bit and whether it touches
+// an occupied voxel (own states of its six neighbours).
 inline std::uint8_t rule(std::uint8_t s, std::uint8_t o, std::uint8_t region, bool touches) {
   const std::uint8_t gap = ((s == kFree) & touches) ? kUnknown : s;
   return o != kUnknown ? o : (region ? kUnknown : gap);
 }
 
-// Applies the rules to one row and returns false when it holds no seed of the gap flood (a gap
-// voxel the rules left unknown that touches an occupied voxel), so that only the other rows are
-// searched for seeds. Branch-free, so the whole row vectorises.
-__attribute__((target_clones("avx2", "default")))
-bool rules_row(std::uint8_t* __restrict st, const std::uint8_t* __restrict own, const std::uint8_t* __restrict region,
-               const std::uint8_t* __restrict ym, const std::uint8_t* __restrict yp, const std::uint8_t* __restrict zm,
-               const std::uint8_t* __restrict zp, std::size_t n) {
-  auto across = [&](std::size_t x) {  // occupied neighbour in y or z
-    return (ym[x] == kOccupied) | (yp[x] == kOccupied) | (zm[x] == kOccupied) | (zp[x] == kOccupied);
-  };
-  auto seed = [&](std::size_t x, bool touches) {
-    return static_cast<std::uint8_t>((own[x] == kUnknown) & (region[x] == 0) & touches & (st[x] == kUnknown));
-  };
-  if (n == 1) {
-    st[0] = rule(st[0], own[0], region[0], across(0));
-    return seed(0, across(0));
+// The bits of row r's voxels that touch an occupied voxel: its occupied neighbours along x (the
+// row's own bits shifted; the bits past nx are 0, so nothing comes in past the ends) and along y
+// and z (rows ym, yp, zm, zp of occupied bits; rows of zeros outside the map). The rules work on
+// bits: 64 voxels per operation, and no scalar ends where a neighbour is outside the row.
+void touching_bits(const word_t* o, const word_t* ym, const word_t* yp, const word_t* zm, const word_t* zp,
+                   std::size_t W, std::uint64_t* t) {
+  for (std::size_t i = 0; i < W; ++i) {
+    const std::uint64_t left = (o[i] << 1) | (i > 0 ? o[i - 1] >> 63 : 0);       // x - 1 occupied
+    const std::uint64_t right = (o[i] >> 1) | (i + 1 < W ? o[i + 1] << 63 : 0);  // x + 1 occupied
+    t[i] = left | right | ym[i] | yp[i] | zm[i] | zp[i];
   }
-  for (std::size_t x = 1; x + 1 < n; ++x) {
-    const bool touches = (own[x - 1] == kOccupied) | (own[x + 1] == kOccupied) | across(x);
-    st[x] = rule(st[x], own[x], region[x], touches);
+}
+
+// The rules on a row of n voxels (states st, in place) from bit rows: u and o its own states
+// (OwnBits), reg its region bits, t touching_bits(). Appends the seeds of the gap flood (a gap
+// voxel the rules left unknown that touches an occupied voxel), `first` + x, to `seeds` in x
+// order. The portable kernel, and the reference for the AVX2 one.
+void rules_row(std::uint8_t* st, const word_t* u, const word_t* o, const word_t* reg, const std::uint64_t* t,
+               std::size_t n, std::size_t first, std::vector<std::size_t>& seeds) {
+  for (std::size_t x = 0; x < n; ++x) {
+    const std::size_t i = x / 64;
+    const unsigned b = x % 64;
+    const bool unknown = (u[i] >> b) & 1u, region = (reg[i] >> b) & 1u, touches = (t[i] >> b) & 1u;
+    const std::uint8_t own = unknown ? kUnknown : (((o[i] >> b) & 1u) ? kOccupied : kFree);
+    st[x] = rule(st[x], own, region, touches);
+    if (unknown && !region && touches && st[x] == kUnknown) seeds.push_back(first + x);
   }
-  // A second, cheap pass for the flag (GCC 12 does not vectorise the loop above with a reduction
-  // in it): a superset of the seeds, gap voxels left unknown; the caller checks the neighbours.
-  std::uint8_t any = 0;
-  for (std::size_t x = 1; x + 1 < n; ++x)
-    any |= static_cast<std::uint8_t>((own[x] == kUnknown) & (region[x] == 0) & (st[x] == kUnknown));
-  const bool t0 = (own[1] == kOccupied) | across(0), tn = (own[n - 2] == kOccupied) | across(n - 1);
-  st[0] = rule(st[0], own[0], region[0], t0);
-  st[n - 1] = rule(st[n - 1], own[n - 1], region[n - 1], tn);
-  return any | seed(0, t0) | seed(n - 1, tn);
 }
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #define OCCSEG_RULES_AVX2 1
-__attribute__((target("avx2"))) inline __m256i at32(const std::uint8_t* p, std::size_t x) {
-  return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + x));
-}
-
-// rule() on voxels x .. x + 31 of a row, in place; returns the seeds of the gap flood among them
-// (0xFF: a gap voxel left unknown with an occupied neighbour, as rules_row()'s callers check).
-__attribute__((target("avx2"))) inline __m256i rules_step_avx2(std::uint8_t* st, const std::uint8_t* own,
-                                                               const word_t* region, const std::uint8_t* ym,
-                                                               const std::uint8_t* yp, const std::uint8_t* zm,
-                                                               const std::uint8_t* zp, std::size_t x) {
-  const __m256i occ = _mm256_set1_epi8(static_cast<char>(kOccupied)), unk = _mm256_set1_epi8(static_cast<char>(kUnknown));
-  const __m256i fre = _mm256_set1_epi8(static_cast<char>(kFree));
-  const __m256i o = at32(own, x), s = at32(st, x);
-  const __m256i touches =
-      _mm256_or_si256(_mm256_or_si256(_mm256_cmpeq_epi8(at32(own, x - 1), occ), _mm256_cmpeq_epi8(at32(own, x + 1), occ)),
-                      _mm256_or_si256(_mm256_or_si256(_mm256_cmpeq_epi8(at32(ym, x), occ), _mm256_cmpeq_epi8(at32(yp, x), occ)),
-                                      _mm256_or_si256(_mm256_cmpeq_epi8(at32(zm, x), occ), _mm256_cmpeq_epi8(at32(zp, x), occ))));
-  const __m256i reg = detail::bytes_of_bits32(region, x);
+// rule() on voxels x .. x + 31 of a row, in place, from bit rows as in rules_row(); returns the
+// seeds among them (0xFF).
+__attribute__((target("avx2"))) inline __m256i rules_step_avx2(std::uint8_t* st, const word_t* u, const word_t* o,
+                                                               const word_t* reg, const word_t* t, std::size_t x) {
+  const __m256i unk = _mm256_set1_epi8(static_cast<char>(kUnknown)), fre = _mm256_set1_epi8(static_cast<char>(kFree));
+  const __m256i occ = _mm256_set1_epi8(static_cast<char>(kOccupied));
+  __m256i* const at = reinterpret_cast<__m256i*>(st + x);
+  const __m256i s = _mm256_loadu_si256(at);
+  const __m256i own_unknown = detail::bytes_of_bits32(u, x), region = detail::bytes_of_bits32(reg, x);
+  const __m256i touches = detail::bytes_of_bits32(t, x);
+  const __m256i known = _mm256_and_si256(detail::bytes_of_bits32(o, x), occ);  // free (0) or occupied
   const __m256i gap = _mm256_blendv_epi8(s, unk, _mm256_and_si256(_mm256_cmpeq_epi8(s, fre), touches));
-  const __m256i own_unknown = _mm256_cmpeq_epi8(o, unk);
-  const __m256i res = _mm256_blendv_epi8(o, _mm256_blendv_epi8(gap, unk, reg), own_unknown);
-  _mm256_storeu_si256(reinterpret_cast<__m256i*>(st + x), res);
-  return _mm256_andnot_si256(reg, _mm256_and_si256(_mm256_and_si256(own_unknown, touches), _mm256_cmpeq_epi8(res, unk)));
+  const __m256i res = _mm256_blendv_epi8(known, _mm256_blendv_epi8(gap, unk, region), own_unknown);
+  _mm256_storeu_si256(at, res);
+  return _mm256_andnot_si256(region, _mm256_and_si256(_mm256_and_si256(own_unknown, touches), _mm256_cmpeq_epi8(res, unk)));
 }
 
-// rules_row() for rows of at least 34 voxels, 32 voxels per step in hand-written AVX2, with the
-// region read from its bit row (no byte row unpacked first); the last step overlaps the one
-// before instead of a scalar tail (the rules are idempotent: a second application to a result
-// gives the result). GCC's vectorised rules_row spent two thirds of its instructions on a row of
-// 320 in its scalar tails and second pass. The seeds of the gap flood come out of the same
-// steps, exactly (`first` + x for each, appended to `seeds` in x order): rules_row()'s superset
-// sent most rows of the scene through a scalar search (0.6 of the rules' 2.2 ms).
-__attribute__((target("avx2"))) void rules_row_avx2(std::uint8_t* st, const std::uint8_t* own, const word_t* region,
-                                                    const std::uint8_t* ym, const std::uint8_t* yp,
-                                                    const std::uint8_t* zm, const std::uint8_t* zp, std::size_t n,
+// rules_row() for rows of at least 32 voxels, 32 voxels per step in hand-written AVX2; the last
+// step overlaps the one before instead of a scalar tail (the rules are idempotent: a second
+// application to a result gives the result), and only its new voxels' seeds are taken. The seeds
+// come out of the same steps: a superset of them (before the touching bits) sent most rows of the
+// scene through a scalar search (0.6 of the rules' 2.2 ms).
+__attribute__((target("avx2"))) void rules_row_avx2(std::uint8_t* st, const word_t* u, const word_t* o,
+                                                    const word_t* reg, const std::uint64_t* t, std::size_t n,
                                                     std::size_t first, std::vector<std::size_t>& seeds) {
-  const auto reg_at = [&](std::size_t i) { return static_cast<std::uint8_t>((region[i / 64] >> (i % 64)) & 1); };
-  auto across = [&](std::size_t i) {
-    return (ym[i] == kOccupied) | (yp[i] == kOccupied) | (zm[i] == kOccupied) | (zp[i] == kOccupied);
-  };
-  const bool t0 = (own[1] == kOccupied) | across(0), tn = (own[n - 2] == kOccupied) | across(n - 1);
-  auto seed = [&](std::size_t i, bool t) {
-    return (own[i] == kUnknown) & (reg_at(i) == 0) & t & (st[i] == kUnknown);
-  };
-  // voxel x of the step at x0 is a seed where bit x - x0 of m is set; bits below `from` - x0 are
-  // voxels an earlier step reported already
-  const auto add = [&](std::size_t x0, std::uint32_t m, std::size_t from) {
-    if (from > x0) m &= ~0u << (from - x0);
+  const auto* const tw = reinterpret_cast<const word_t*>(t);
+  // Steps at x0 = 0, 32, ... and, for the last n % 32 voxels, at n - 32, whose seeds below
+  // `done` (bit k: voxel x0 + k) the step before reported already. (No lambda: it would not be
+  // compiled for AVX2.)
+  for (std::size_t done = 0; done < n;) {
+    const std::size_t x0 = std::min(done, n - 32);
+    auto m = static_cast<std::uint32_t>(_mm256_movemask_epi8(rules_step_avx2(st, u, o, reg, tw, x0)));
+    if (done > x0) m &= ~0u << (done - x0);
     for (; m; m &= m - 1) seeds.push_back(first + x0 + static_cast<std::size_t>(__builtin_ctz(m)));
-  };
-  st[0] = rule(st[0], own[0], reg_at(0), t0);
-  if (seed(0, t0)) seeds.push_back(first);
-  std::size_t x = 1;
-  for (; x + 32 <= n - 1; x += 32)
-    add(x, static_cast<std::uint32_t>(_mm256_movemask_epi8(rules_step_avx2(st, own, region, ym, yp, zm, zp, x))), x);
-  if (x < n - 1)
-    add(n - 1 - 32, static_cast<std::uint32_t>(_mm256_movemask_epi8(rules_step_avx2(st, own, region, ym, yp, zm, zp, n - 1 - 32))), x);
-  st[n - 1] = rule(st[n - 1], own[n - 1], reg_at(n - 1), tn);
-  if (seed(n - 1, tn)) seeds.push_back(first + n - 1);
+    done = x0 + 32;
+  }
+}
+
+// rules_row() 64 voxels per step in AVX-512 (F, BW): the bit words are the blend and compare
+// masks themselves, so nothing is spread into bytes; the last n % 64 voxels are one masked step.
+__attribute__((target("avx512f,avx512bw"))) void rules_row_avx512(std::uint8_t* st, const word_t* u, const word_t* o,
+                                                                  const word_t* reg, const std::uint64_t* t,
+                                                                  std::size_t n, std::size_t first,
+                                                                  std::vector<std::size_t>& seeds) {
+  const __m512i unk = _mm512_set1_epi8(static_cast<char>(kUnknown)), fre = _mm512_set1_epi8(static_cast<char>(kFree));
+  const __m512i occ = _mm512_set1_epi8(static_cast<char>(kOccupied));
+  for (std::size_t i = 0; 64 * i < n; ++i) {
+    const std::size_t x = 64 * i;
+    const __mmask64 in = n - x >= 64 ? ~__mmask64(0) : (__mmask64(1) << (n - x)) - 1;
+    const __m512i s = _mm512_maskz_loadu_epi8(in, st + x);
+    const __mmask64 gap = _mm512_cmpeq_epi8_mask(s, fre) & t[i];           // free, touching: unknown
+    const __m512i res_unknown = _mm512_mask_mov_epi8(s, reg[i] | gap, unk);  // own state unknown
+    const __m512i res = _mm512_mask_blend_epi8(u[i], _mm512_maskz_mov_epi8(o[i], occ), res_unknown);
+    _mm512_mask_storeu_epi8(st + x, in, res);
+    std::uint64_t m = u[i] & ~reg[i] & t[i] & _mm512_cmpeq_epi8_mask(res, unk) & in;
+    for (; m; m &= m - 1) seeds.push_back(first + x + static_cast<std::size_t>(__builtin_ctzll(m)));
+  }
 }
 #endif
 
-std::atomic<bool> g_vector_rules{true};
+// The rule rows' kernel: the fastest the processor has up to detail::set_texture_kernel()'s
+// setting (which the tests step through).
+enum class RulesKernel { portable, avx2, avx512 };
+RulesKernel rules_kernel(std::size_t nx) {
+#ifdef OCCSEG_RULES_AVX2
+  const detail::TextureKernel k = detail::texture_kernel();
+  if (k >= detail::TextureKernel::avx512 && cpu_has_avx512()) return RulesKernel::avx512;
+  if (k >= detail::TextureKernel::avx2 && cpu_has_avx2() && nx >= 32) return RulesKernel::avx2;
+#endif
+  (void)nx;
+  return RulesKernel::portable;
+}
 
 }  // namespace
-
-namespace detail {
-void set_vector_rules(bool enabled) { g_vector_rules.store(enabled, std::memory_order_relaxed); }
-}  // namespace detail
 
 namespace {
 
@@ -240,22 +242,19 @@ namespace {
 // and in a region). apply_voxel_rules() reads it row by row; the byte mask of unknown_regions()
 // is made from it only when asked for: allocating, zero-filling and writing 13 MB of bytes, and
 // reading them back, cost more than the opening itself.
-BitMask region_bits(const std::uint8_t* own, const Dims& d, const Params& params, std::uint8_t* scratch = nullptr,
-                    std::size_t scratch_bytes = 0, const std::uint64_t* unknown_bits = nullptr) {
+BitMask region_bits(const detail::OwnBits& own, const Dims& d, const Params& params, std::uint8_t* scratch = nullptr,
+                    std::size_t scratch_bytes = 0) {
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, rows = ny * nz, bytes = BitMask::bytes(nx, rows);
   const int r = params.gap_radius;
   // Three masks in the scratch when it holds them (not for very narrow maps: a word per row).
   const bool fits = scratch && 3 * bytes <= scratch_bytes;
   BitMask a(nx, rows, fits ? scratch : nullptr), b(nx, r > 0 ? rows : 0, fits ? scratch + bytes : nullptr),
       c(nx, r > 0 ? rows : 0, fits ? scratch + 2 * bytes : nullptr);
-  // The 0.5 bits from the texture's pass (CellRows) when there are, else packed from own here.
-  const BitMask half(nx, unknown_bits ? rows : 0, const_cast<std::uint64_t*>(unknown_bits));
+  // The 0.5 bits: the own states' unknown bits.
+  const BitMask half(nx, rows, const_cast<std::uint64_t*>(own.unknown));
   if (r <= 0) {  // no opening: every 0.5 voxel is in a region
     parallel_for_dynamic(rows, params.threads, [&](std::size_t r0, std::size_t r1) {
-      for (std::size_t rw = r0; rw < r1; ++rw) {
-        if (unknown_bits) std::copy(half.row(rw), half.row(rw) + a.W, a.row(rw));
-        else detail::pack_equal(own + rw * nx, nx, kUnknown, a.row(rw));
-      }
+      for (std::size_t rw = r0; rw < r1; ++rw) std::copy(half.row(rw), half.row(rw) + a.W, a.row(rw));
     });
     return a;
   }
@@ -267,12 +266,7 @@ BitMask region_bits(const std::uint8_t* own, const Dims& d, const Params& params
   //   per plane: dilate z b -> c.
   parallel_for_dynamic(nz, params.threads, [&](std::size_t z0, std::size_t z1) {
     for (std::size_t z = z0; z < z1; ++z) {
-      if (unknown_bits) {
-        box_x(half, b, ny * z, ny * (z + 1), r, true);
-      } else {
-        for (std::size_t y = 0; y < ny; ++y) detail::pack_equal(own + (y + ny * z) * nx, nx, kUnknown, a.row(y + ny * z));
-        box_x(a, b, ny * z, ny * (z + 1), r, true);
-      }
+      box_x(half, b, ny * z, ny * (z + 1), r, true);
       for (std::size_t y = 0; y < ny; ++y) box_line(b, a, ny * z, 1, ny, y, r, true);
     }
   });
@@ -295,7 +289,8 @@ inline bool bit(const BitMask& m, std::size_t row, std::size_t x) { return (m.ro
 }  // namespace
 
 std::vector<std::uint8_t> unknown_regions(const std::vector<std::uint8_t>& own, const Dims& d, const Params& params) {
-  const BitMask a = region_bits(own.data(), d, params);
+  const detail::OwnBitsStore bits = detail::pack_own_bits(own.data(), d, params.threads);
+  const BitMask a = region_bits(bits.bits, d, params);
   std::vector<std::uint8_t> m;
   resize_huge(m, own.size());
   const std::size_t nx = d.nx;
@@ -313,10 +308,10 @@ namespace {
 // be labelled free everywhere but along its rim. `queue` holds the seeds (gap voxels left unknown
 // that touch an occupied voxel), in any order: the result is a set (connected components), so it
 // does not depend on visiting order.
-void flood_gaps_from_objects(std::uint8_t* st, const std::uint8_t* own,
-                             const BitMask& region, const Dims& d, std::vector<std::size_t>& queue) {
+void flood_gaps_from_objects(std::uint8_t* st, const detail::OwnBits& own, const BitMask& region, const Dims& d,
+                             std::vector<std::size_t>& queue) {
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, sz = nx * ny;
-  auto gap = [&](std::size_t i) { return own[i] == kUnknown && !bit(region, i / nx, i % nx); };
+  auto gap = [&](std::size_t i) { return own.at(i / nx, i % nx) == kUnknown && !bit(region, i / nx, i % nx); };
   while (!queue.empty()) {
     const std::size_t i = queue.back();
     queue.pop_back();
@@ -338,47 +333,38 @@ void flood_gaps_from_objects(std::uint8_t* st, const std::uint8_t* own,
 
 }  // namespace
 
-void detail::apply_voxel_rules(std::uint8_t* st, const std::uint8_t* own, const Dims& d,
-                               const Params& params, std::uint8_t* scratch, std::size_t scratch_bytes,
-                               const std::uint64_t* unknown_bits) {
-  const BitMask region = region_bits(own, d, params, scratch, scratch_bytes, unknown_bits);
-  const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, sz = nx * ny;
-  const std::vector<std::uint8_t> none(nx, kFree);  // outside the map: no occupied neighbour
+void detail::apply_voxel_rules(std::uint8_t* st, const OwnBits& own, const Dims& d, const Params& params,
+                               std::uint8_t* scratch, std::size_t scratch_bytes) {
+  const BitMask region = region_bits(own, d, params, scratch, scratch_bytes);
+  const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, W = own.words;
+  const std::vector<std::uint64_t> none(W, 0);  // outside the map: no occupied neighbour
   // Reads only own states and each voxel's own entry of st, so rows are independent. The seeds of
-  // the gap flood are gathered on the way, slab by slab (the AVX2 rows find them exactly; the
-  // others flag rows that may hold some, which are then searched).
+  // the gap flood are gathered on the way, slab by slab.
   std::vector<std::size_t> seeds;
   std::mutex seeds_mutex;
-#ifdef OCCSEG_RULES_AVX2
-  const bool avx2 = nx >= 34 && cpu_has_avx2() && g_vector_rules.load(std::memory_order_relaxed);
-#endif
+  const RulesKernel kernel = rules_kernel(nx);
   parallel_for_dynamic(nz, params.threads, [&](std::size_t z0, std::size_t z1) {
     std::vector<std::size_t> mine;
-    std::vector<std::uint8_t> reg(nx);  // this row's region bits as bytes
+    std::vector<std::uint64_t> touching(W);
     for (std::size_t z = z0; z < z1; ++z)
       for (std::size_t y = 0; y < ny; ++y) {
-        const std::size_t i = nx * (y + ny * z);
-        const std::uint8_t* o = own + i;
-        const word_t* const bits = region.row(y + ny * z);
-        const std::uint8_t *ym = y > 0 ? o - nx : none.data(), *yp = y + 1 < ny ? o + nx : none.data();
-        const std::uint8_t *zm = z > 0 ? o - sz : none.data(), *zp = z + 1 < nz ? o + sz : none.data();
+        const std::size_t r = y + ny * z, i = nx * r;
+        const auto* const u = reinterpret_cast<const word_t*>(own.unknown) + r * W;
+        const auto* const o = reinterpret_cast<const word_t*>(own.occupied) + r * W;
+        const auto* const out = reinterpret_cast<const word_t*>(none.data());
+        touching_bits(o, y > 0 ? o - W : out, y + 1 < ny ? o + W : out, z > 0 ? o - ny * W : out,
+                      z + 1 < nz ? o + ny * W : out, W, touching.data());
 #ifdef OCCSEG_RULES_AVX2
-        if (avx2) {
-          rules_row_avx2(st + i, o, bits, ym, yp, zm, zp, nx, i, mine);
+        if (kernel == RulesKernel::avx512) {
+          rules_row_avx512(st + i, u, o, region.row(r), touching.data(), nx, i, mine);
+          continue;
+        }
+        if (kernel == RulesKernel::avx2) {
+          rules_row_avx2(st + i, u, o, region.row(r), touching.data(), nx, i, mine);
           continue;
         }
 #endif
-        unpack_half(bits, o, nx, reg.data());
-        if (!rules_row(st + i, o, reg.data(), ym, yp, zm, zp, nx)) continue;
-        for (std::size_t x = 0; x < nx; ++x) {
-          const std::size_t j = i + x;
-          // (the region bit alone: it matters only where the own state is unknown)
-          if (st[j] != kUnknown || own[j] != kUnknown || ((bits[x / 64] >> (x % 64)) & 1)) continue;
-          const bool touches = (x > 0 && own[j - 1] == kOccupied) || (x + 1 < nx && own[j + 1] == kOccupied) ||
-                               (y > 0 && own[j - nx] == kOccupied) || (y + 1 < ny && own[j + nx] == kOccupied) ||
-                               (z > 0 && own[j - sz] == kOccupied) || (z + 1 < nz && own[j + sz] == kOccupied);
-          if (touches) mine.push_back(j);
-        }
+        rules_row(st + i, u, o, region.row(r), touching.data(), nx, i, mine);
       }
     std::lock_guard<std::mutex> lock(seeds_mutex);
     seeds.insert(seeds.end(), mine.begin(), mine.end());
@@ -388,7 +374,8 @@ void detail::apply_voxel_rules(std::uint8_t* st, const std::uint8_t* own, const 
 
 void apply_voxel_rules(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
                        const Params& params) {
-  detail::apply_voxel_rules(st.data(), own.data(), d, params, nullptr, 0);
+  const detail::OwnBitsStore bits = detail::pack_own_bits(own.data(), d, params.threads);
+  detail::apply_voxel_rules(st.data(), bits.bits, d, params, nullptr, 0);
 }
 
 std::vector<std::uint8_t> unknown_regions(const Grid& g, const Params& params) {

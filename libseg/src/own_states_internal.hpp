@@ -44,9 +44,37 @@ inline void own_states_of(const float* p, std::size_t n, float lo, float hi, std
   for (; i < n; ++i) out[i] = static_cast<std::uint8_t>(p[i] < lo ? 0 : (p[i] > hi ? 2 : 1));
 }
 
-// Creation's reading of the map, row by row: each voxel's own state (into `own`, when given; with
-// `unknown_bits` too, own state unknown as a bit per voxel, a row of ceil(nx / 64) words per row
-// of voxels, bits past nx 0: the refinement's growth and opening start from it) and
+// The voxels' own states as two bit masks in bit_rows_internal.hpp's layout (row r of the map in
+// words [r * words, (r + 1) * words), voxel x at bit x % 64 of word x / 64, bits past nx 0):
+// `unknown` (p in the band) and `occupied` (above it); a free voxel has neither. The refinement
+// and the default rules read these instead of a byte per voxel: segment() has the texture's first
+// pass write them from the map (CellRows), so no own state is ever written as a byte there.
+struct OwnBits {
+  const std::uint64_t* unknown = nullptr;
+  const std::uint64_t* occupied = nullptr;
+  std::size_t words = 0;  // per row: ceil(nx / 64)
+  // The own state (State's value: 0 free, 1 unknown, 2 occupied) of voxel x of row r.
+  std::uint8_t at(std::size_t r, std::size_t x) const {
+    const std::size_t i = r * words + x / 64;
+    const unsigned b = x % 64;
+    return static_cast<std::uint8_t>(((unknown[i] >> b) & 1u) | (((occupied[i] >> b) & 1u) << 1));
+  }
+};
+
+// OwnBits packed from own states in bytes (own_states()), with their storage (the public stages
+// take the bytes).
+struct OwnBitsStore {
+  std::vector<std::uint64_t> unknown, occupied;
+  OwnBits bits;
+};
+OwnBitsStore pack_own_bits(const std::uint8_t* own, const Dims& dims, int threads);
+// The same into caller storage (dims.ny * dims.nz * ceil(nx / 64) words each).
+void pack_own_bits(const std::uint8_t* own, const Dims& dims, int threads, std::uint64_t* unknown,
+                   std::uint64_t* occupied);
+
+// Creation's reading of the map, row by row: each voxel's own state (into `own` as bytes, when
+// given, and into `unknown_bits` and `occupied_bits` as OwnBits, when given: the refinement's
+// growth, boundary scans and rules start from those) and
 // the sum of each kMeanCell^3 cell of the lattice anchored at voxel 0 (the far faces cut the last
 // ones), its rows added in scan order, each row's voxels in x order: the order of
 // mean_occupancy(). segment() has the texture's first pass do it while each row is in the cache
@@ -55,7 +83,8 @@ inline void own_states_of(const float* p, std::size_t n, float lo, float hi, std
 // by one thread, in scan order.
 class CellRows {
  public:
-  CellRows(const Grid& grid, std::uint8_t* own, float lo, float hi, std::uint64_t* unknown_bits = nullptr);
+  CellRows(const Grid& grid, std::uint8_t* own, float lo, float hi, std::uint64_t* unknown_bits = nullptr,
+           std::uint64_t* occupied_bits = nullptr);
   void add_row(std::size_t y, std::size_t z);
   const std::vector<double>& sums() const { return sum_; }  // cell (x, y, z) at x + ncx * (y + ncy * z)
   std::size_t cells_x() const { return ncx_; }
@@ -65,6 +94,7 @@ class CellRows {
   const Grid* grid_;
   std::uint8_t* own_;
   std::uint64_t* unknown_;
+  std::uint64_t* occupied_;
   float lo_, hi_;
   std::size_t ncx_, ncy_;
   bool avx2_, avx512_;
@@ -103,12 +133,11 @@ struct GrowthRows {
 // kMeanCell^3 cells (row by row, into the cells' sums); empty for other blocks.
 std::vector<double> block_means_by_rows(const Grid& grid, const std::vector<Block>& blocks, int threads);
 
-// The refinement steps and the default rules with the own states in any storage (the public
-// versions take a vector; segment() keeps them in the label array). `scratch` (8-byte aligned,
-// or nullptr) may hold the rules' three bit masks of the opening if it has room.
+// The refinement steps and the default rules with the own states as bits (the public versions
+// take bytes and pack them). `scratch` (8-byte aligned, or nullptr) may hold the rules' three bit
+// masks of the opening if it has room.
 void refine_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& dims, const Params& params);
-void refine_boundaries(std::uint8_t* states, const std::uint8_t* own, const Dims& dims,
-                       const Params& params);
+void refine_boundaries(std::uint8_t* states, const OwnBits& own, const Dims& dims, const Params& params);
 // The unknown growth of refine_unknown() on bit masks (unknown_growth.cpp), kept in `scratch`
 // (8-byte aligned) when it has grow_unknown_scratch_bytes(), else in an array of its own. With
 // `unknown_bits` (CellRows' bits of `own`), own is not read.
@@ -121,15 +150,11 @@ void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& dim
                   std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits = nullptr,
                   std::uint8_t* occupied_rows = nullptr, bool packed = false);
 
-// refine_unknown() then refine_boundaries(), the masks of the first in `scratch` if it has room.
-// `unknown_bits` as in grow_unknown(), or nullptr; `growth` (its scratch the same as `scratch`),
-// when the creation filled it.
-void refine(std::uint8_t* states, const std::uint8_t* own, const Dims& dims, const Params& params,
-            std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits = nullptr,
-            const GrowthRows* growth = nullptr);
-// With `unknown_bits` (as in grow_unknown()), the opening starts from them instead of `own`.
-void apply_voxel_rules(std::uint8_t* states, const std::uint8_t* own, const Dims& dims,
-                       const Params& params, std::uint8_t* scratch, std::size_t scratch_bytes,
-                       const std::uint64_t* unknown_bits = nullptr);
+// refine_unknown() then refine_boundaries(), the masks of the first in `scratch` if it has room;
+// `growth` (its scratch the same as `scratch`), when the creation filled it.
+void refine(std::uint8_t* states, const OwnBits& own, const Dims& dims, const Params& params, std::uint8_t* scratch,
+            std::size_t scratch_bytes, const GrowthRows* growth = nullptr);
+void apply_voxel_rules(std::uint8_t* states, const OwnBits& own, const Dims& dims, const Params& params,
+                       std::uint8_t* scratch, std::size_t scratch_bytes);
 
 }  // namespace occseg::detail

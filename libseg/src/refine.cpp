@@ -17,23 +17,25 @@ const ScanDirection kSixDirections[6] = {{0, +1}, {0, -1}, {1, +1}, {1, -1}, {2,
 
 namespace {
 
+using detail::OwnBits;
+
 constexpr std::uint8_t kFree = static_cast<std::uint8_t>(State::free);
 constexpr std::uint8_t kOccupied = static_cast<std::uint8_t>(State::occupied);
 constexpr int kMaxLook = 64;  // params.lookahead's upper bound
 
 // The four cases on own states (own[k] == kFree: p below the band, kOccupied: above it).
-void classify_own(const std::uint8_t* const* own, int n, std::uint8_t from, bool* reassign) {
+void classify_own(const std::uint8_t* own, int n, std::uint8_t from, bool* reassign) {
   bool low = false, high = false;
   for (int k = 0; k < n; ++k) {
-    low = low || *own[k] == kFree;
-    high = high || *own[k] == kOccupied;
+    low = low || own[k] == kFree;
+    high = high || own[k] == kOccupied;
     reassign[k] = false;
   }
   const bool other = (from == kFree) ? low : high;
   const bool own_side = (from == kFree) ? high : low;
   if (!other) return;  // cases i and ii
   for (int k = 0; k < n; ++k)
-    reassign[k] = !own_side || ((from == kFree) ? *own[k] != kOccupied : *own[k] != kFree);  // iii / iv
+    reassign[k] = !own_side || ((from == kFree) ? own[k] != kOccupied : own[k] != kFree);  // iii / iv
 }
 
 inline bool is_boundary(std::uint8_t a, std::uint8_t s) {
@@ -78,13 +80,13 @@ std::size_t next_boundary(const std::uint8_t* st, std::size_t k, std::size_t len
   return k;
 }
 
-void boundary_row(std::uint8_t* st, const std::uint8_t* own, std::size_t len, int step, int look) {
+// Row r of the map (states `st`, own states row r of `own`), scanned forward or backward.
+void boundary_row(std::uint8_t* st, const OwnBits& own, std::size_t r, std::size_t len, int step, int look) {
   if (len < 2) return;
   if (!any_boundary(st, st + 1, len - 1)) return;  // windows only ever start at a boundary
   const std::ptrdiff_t stride = step;
   std::uint8_t* first = step > 0 ? st : st + len - 1;
-  const std::uint8_t* ofirst = step > 0 ? own : own + len - 1;
-  const std::uint8_t* win[kMaxLook];
+  std::uint8_t win[kMaxLook];
   bool re[kMaxLook];
   std::size_t k = 1;
   while ((k = next_boundary(st, k, len, step)) < len) {
@@ -92,7 +94,7 @@ void boundary_row(std::uint8_t* st, const std::uint8_t* own, std::size_t len, in
     const std::uint8_t a = c[-stride], s = c[0];
     int n = 0;
     while (n < look && k + n < len && c[n * stride] == s) {
-      win[n] = ofirst + static_cast<std::ptrdiff_t>(k + n) * stride;
+      win[n] = own.at(r, step > 0 ? k + n : len - 1 - (k + n));
       ++n;
     }
     classify_own(win, n, a, re);
@@ -116,19 +118,19 @@ inline Plane plane_shape(const Dims& d, int axis) {
   return axis == 1 ? Plane{d.ny, static_cast<std::ptrdiff_t>(d.nx)} : Plane{d.nz, static_cast<std::ptrdiff_t>(d.nx * d.ny)};
 }
 
-// Starts the window of lane x at row k of a plane scan; returns the lane's new skip count. A
-// window that writes occupied voxels marks their rows in `occ` (the flag of row k + w is
-// occ_k[w * fs]).
-inline std::uint8_t plane_window(std::uint8_t* cur, const std::uint8_t* ocur, std::size_t x, std::ptrdiff_t rs,
-                                 std::size_t k, std::size_t rows, int look, std::uint8_t a, std::uint8_t* occ_k,
-                                 std::ptrdiff_t fs) {
-  const std::uint8_t* win[kMaxLook];
+// Starts the window of lane x at row k of a plane scan; returns the lane's new skip count. The
+// own states of scan row k + w are in row orow + w * ors of `own`. A window that writes occupied
+// voxels marks their rows in `occ` (the flag of row k + w is occ_k[w * fs]).
+inline std::uint8_t plane_window(std::uint8_t* cur, const OwnBits& own, std::size_t orow, std::ptrdiff_t ors,
+                                 std::size_t x, std::ptrdiff_t rs, std::size_t k, std::size_t rows, int look,
+                                 std::uint8_t a, std::uint8_t* occ_k, std::ptrdiff_t fs) {
+  std::uint8_t win[kMaxLook];
   bool re[kMaxLook];
   const std::uint8_t s = cur[x];
-  win[0] = ocur + static_cast<std::ptrdiff_t>(x);  // the boundary voxel itself always belongs
+  win[0] = own.at(orow, x);  // the boundary voxel itself always belongs
   int n = 1;
   while (n < look && k + n < rows && cur[static_cast<std::ptrdiff_t>(x) + n * rs] == s) {
-    win[n] = ocur + static_cast<std::ptrdiff_t>(x) + n * rs;
+    win[n] = own.at(static_cast<std::size_t>(static_cast<std::ptrdiff_t>(orow) + n * ors), x);
     ++n;
   }
   classify_own(win, n, a, re);
@@ -143,20 +145,21 @@ inline std::uint8_t plane_window(std::uint8_t* cur, const std::uint8_t* ocur, st
 // Rows the scan of a plane passes over: a free/occupied pair needs an occupied voxel in one of
 // its two rows, so a pair of rows without one (flags in `occ`: row r at occ[r * occ_row], a
 // superset kept by the windows) is skipped unread; on the benchmark scene 95 % of the rows hold no
-// occupied voxel. Running windows still count down there.
-void boundary_plane(std::uint8_t* st, const std::uint8_t* own, std::size_t nx, Plane pl, int step, int look,
-                    std::uint8_t* skip, std::uint8_t* occ, std::ptrdiff_t occ_row) {
+// occupied voxel. Running windows still count down there. Row r of the plane has its own states
+// in row orow0 + r * occ_row of `own` (the flags are per row of the map too).
+void boundary_plane(std::uint8_t* st, const OwnBits& own, std::size_t orow0, std::size_t nx, Plane pl, int step,
+                    int look, std::uint8_t* skip, std::uint8_t* occ, std::ptrdiff_t occ_row) {
   std::fill(skip, skip + nx, 0);
   const std::ptrdiff_t rs = pl.row * step;  // signed distance from one row to the next in scan order
-  const std::ptrdiff_t fs = occ_row * step;  // the same for the rows' flags
+  const std::ptrdiff_t fs = occ_row * step;  // the same for the rows' flags (and own states' rows)
   std::uint8_t* first = step > 0 ? st : st + static_cast<std::ptrdiff_t>(pl.rows - 1) * pl.row;
-  const std::uint8_t* ofirst = step > 0 ? own : own + static_cast<std::ptrdiff_t>(pl.rows - 1) * pl.row;
+  const std::size_t ofirst = step > 0 ? orow0 : orow0 + (pl.rows - 1) * static_cast<std::size_t>(occ_row);
   std::uint8_t* ffirst = step > 0 ? occ : occ + static_cast<std::ptrdiff_t>(pl.rows - 1) * occ_row;
   std::size_t last_start = 0;  // the last row where a window started (skip counts are < look)
   for (std::size_t k = 1; k < pl.rows; ++k) {
     std::uint8_t* cur = first + static_cast<std::ptrdiff_t>(k) * rs;
     const std::uint8_t* prev = cur - rs;
-    const std::uint8_t* ocur = ofirst + static_cast<std::ptrdiff_t>(k) * rs;
+    const auto ocur = static_cast<std::size_t>(static_cast<std::ptrdiff_t>(ofirst) + static_cast<std::ptrdiff_t>(k) * fs);
     std::uint8_t* fk = ffirst + static_cast<std::ptrdiff_t>(k) * fs;
     if (!(fk[-fs] | fk[0])) {
       if (k < last_start + static_cast<std::size_t>(look))
@@ -176,7 +179,7 @@ void boundary_plane(std::uint8_t* st, const std::uint8_t* own, std::size_t nx, P
       _mm_storeu_si128(reinterpret_cast<__m128i*>(skip + x), _mm_subs_epu8(sk, one));
       for (auto m = static_cast<unsigned>(_mm_movemask_epi8(start)); m; m &= m - 1) {
         const std::size_t lane = x + static_cast<std::size_t>(__builtin_ctz(m));
-        skip[lane] = plane_window(cur, ocur, lane, rs, k, pl.rows, look, prev[lane], fk, fs);
+        skip[lane] = plane_window(cur, own, ocur, fs, lane, rs, k, pl.rows, look, prev[lane], fk, fs);
         last_start = k;
       }
     }
@@ -187,7 +190,7 @@ void boundary_plane(std::uint8_t* st, const std::uint8_t* own, std::size_t nx, P
         continue;
       }
       if (is_boundary(prev[x], cur[x])) {
-        skip[x] = plane_window(cur, ocur, x, rs, k, pl.rows, look, prev[x], fk, fs);
+        skip[x] = plane_window(cur, own, ocur, fs, x, rs, k, pl.rows, look, prev[x], fk, fs);
         last_start = k;
       }
     }
@@ -220,7 +223,7 @@ struct Sweep {
 // sweep followed by its y sweep reads and writes exactly what the whole x sweep followed by the
 // whole y sweep would. The default call's six sweeps (two passes x y z) read the map four times
 // instead of six (docs/performance.md, "Fifth round").
-void run_sweeps(std::uint8_t* states, const std::uint8_t* own, const Dims& d, int threads, int look,
+void run_sweeps(std::uint8_t* states, const OwnBits& own, const Dims& d, int threads, int look,
                 const std::vector<Sweep>& sweeps, std::uint8_t* occupied_rows = nullptr) {
   std::uint8_t* const st = states;
   // Per row of voxels (row r: y = r % ny, z = r / ny): may hold an occupied voxel. Handed in
@@ -231,16 +234,15 @@ void run_sweeps(std::uint8_t* states, const std::uint8_t* own, const Dims& d, in
   std::uint8_t* const occ = occupied_rows ? occupied_rows : own_flags.data();
   bool occ_ready = occupied_rows != nullptr;
   const auto row = [&](std::size_t first, int step) {
-    if (occ[first / d.nx]) boundary_row(st + first, own + first, d.nx, step, look);
+    if (occ[first / d.nx]) boundary_row(st + first, own, first / d.nx, d.nx, step, look);
   };
   const auto plane = [&](const Sweep& s, std::size_t o, std::uint8_t* lane, int step) {
     const Plane pl = plane_shape(d, s.axis);
     const std::size_t base = plane_base(d, s.axis, o);
-    if (s.axis == 1)  // rows y of plane z = o
-      boundary_plane(st + base, own + base, d.nx, pl, step, look, lane, occ + d.ny * o, 1);
-    else  // rows z of slice y = o
-      boundary_plane(st + base, own + base, d.nx, pl, step, look, lane, occ + o,
-                     static_cast<std::ptrdiff_t>(d.ny));
+    if (s.axis == 1)  // rows y of plane z = o: rows d.ny * o + y of the map
+      boundary_plane(st + base, own, d.ny * o, d.nx, pl, step, look, lane, occ + d.ny * o, 1);
+    else  // rows z of slice y = o: rows o + d.ny * z
+      boundary_plane(st + base, own, o, d.nx, pl, step, look, lane, occ + o, static_cast<std::ptrdiff_t>(d.ny));
   };
   for (std::size_t g = 0; g < sweeps.size();) {
     // The group's other axis: y (planes of fixed z) or z (slices of fixed y); a lone x sweep
@@ -331,27 +333,26 @@ void refine_unknown(std::vector<std::uint8_t>& st, const std::vector<std::uint8_
   detail::refine_unknown(st.data(), own.data(), d, params);
 }
 
-void detail::refine_boundaries(std::uint8_t* st, const std::uint8_t* own, const Dims& d,
-                               const Params& params) {
+void detail::refine_boundaries(std::uint8_t* st, const OwnBits& own, const Dims& d, const Params& params) {
   run_sweeps(st, own, d, params.threads, lookahead_of(params), boundary_sweeps(params));
 }
 
-void detail::refine(std::uint8_t* st, const std::uint8_t* own, const Dims& d, const Params& params,
-                    std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits,
-                    const GrowthRows* growth) {
+void detail::refine(std::uint8_t* st, const OwnBits& own, const Dims& d, const Params& params, std::uint8_t* scratch,
+                    std::size_t scratch_bytes, const GrowthRows* growth) {
   // The growth reads every row anyway (or the creation flagged them): rows with an occupied voxel
   // are flagged for the sweeps (the growth never makes or unmakes one), which then need not read
   // the map once more (0.4 ms).
   const bool packed = growth && growth->filled && growth->scratch == scratch;
   std::vector<std::uint8_t> own_flags(growth ? 0 : d.ny * d.nz);  // (growth has room for them)
   std::uint8_t* const occupied_rows = growth ? growth->occupied_rows : own_flags.data();
-  grow_unknown(st, own, d, params.threads, scratch, scratch_bytes, unknown_bits, occupied_rows, packed);
+  grow_unknown(st, nullptr, d, params.threads, scratch, scratch_bytes, own.unknown, occupied_rows, packed);
   run_sweeps(st, own, d, params.threads, lookahead_of(params), boundary_sweeps(params), occupied_rows);
 }
 
 void refine_boundaries(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
                        const Params& params) {
-  detail::refine_boundaries(st.data(), own.data(), d, params);
+  const detail::OwnBitsStore bits = detail::pack_own_bits(own.data(), d, params.threads);
+  detail::refine_boundaries(st.data(), bits.bits, d, params);
 }
 
 void refine_unknown(std::vector<std::uint8_t>& st, const Grid& g, const Params& params) {

@@ -127,9 +127,9 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
 
   // The label array holds the stages' per-voxel scratch until the labelling writes the labels:
   // the texture codes (bytes [0, 2n)) through the division, with the texture's LBP codes in
-  // [2n, 3n) while it runs; the voxels' own states in [3n, 4n) from the texture's first pass (or
-  // the creation) through the refinement, whose bit masks take [0, 3n) once the codes are
-  // counted. It is allocated (or recycled) once and paged in once; separate arrays cost more
+  // [2n, 3n) while it runs; the refinement's bit masks take [0, 3n) once the codes are counted.
+  // The voxels' own states are bits (detail::OwnBits, 1/4 byte per voxel) from the texture's
+  // first pass; with a plugin's texture the creation writes them as bytes into [3n, 4n) first. It is allocated (or recycled) once and paged in once; separate arrays cost more
   // allocations, zero-fills and page-ins (docs/performance.md, "Fourth round"). Peak: the labels
   // and the states (5 bytes per voxel); a recycled array does not add to it.
   const std::size_t n = grid.dims.count();
@@ -140,18 +140,21 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   std::optional<detail::CellRows> rows;  // the map's rows as the texture read them, for the creation
   Workspace local;
   Workspace& ws = workspace ? *workspace : local;
-  const std::uint64_t* unknown_bits = nullptr;  // own states' unknown voxels, when the texture's pass wrote them
+  const std::size_t words = (grid.dims.nx + 63) / 64, bit_words = grid.dims.ny * grid.dims.nz * words;
+  ws.unknown_bits.resize(bit_words);  // every word is written
+  ws.occupied_bits.resize(bit_words);
+  const detail::OwnBits own{ws.unknown_bits.data(), ws.occupied_bits.data(), words};
+  bool own_written = false;  // by the texture's first pass
   st.begin("texture");
   if (op && op->native_into) {
     resize_huge(r.labels, n);  // not zeroed (LabelArray): every stage writes before it reads
     // Fresh pages faulted in (and zeroed by the system) over the threads, not by whichever
     // stage first touches them; a recycled array's are in already and cost a write per page.
     touch_pages(r.labels.data(), n * sizeof(std::uint32_t), params.threads);
-    // codes in bytes [0, 2n), the operator's scratch (LBP codes) in [2n, 3n), own states in [3n, 4n)
+    // codes in bytes [0, 2n), the operator's scratch (LBP codes) in [2n, 3n), own states as bits
     std::uint8_t* const bytes = reinterpret_cast<std::uint8_t*>(r.labels.data());
-    ws.unknown_bits.resize(grid.dims.ny * grid.dims.nz * ((grid.dims.nx + 63) / 64));  // every word is written
-    rows.emplace(grid, bytes + 3 * n, own_lo, own_hi, ws.unknown_bits.data());
-    unknown_bits = ws.unknown_bits.data();
+    rows.emplace(grid, nullptr, own_lo, own_hi, ws.unknown_bits.data(), ws.occupied_bits.data());
+    own_written = true;
     const int codes = op->native_into(grid, params, reinterpret_cast<std::uint16_t*>(bytes), bytes + 2 * n, &*rows);
     st.begin("division");
     blocks = detail::divide_codes(grid, reinterpret_cast<const detail::code_t*>(r.labels.data()), codes, params,
@@ -166,16 +169,18 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   }
   st.begin("creation");
   std::uint8_t* const scratch = reinterpret_cast<std::uint8_t*>(r.labels.data());
-  std::uint8_t* const own = scratch + 3 * n;  // the voxels' own states
   // The growth's masks go where it keeps them (the label array's first bytes, free once the
   // codes are counted), written by the creation if it can (GrowthRows).
   const std::size_t room = 3 * n;
   std::vector<std::uint8_t> occupied_rows(grid.dims.ny * grid.dims.nz);
-  detail::GrowthRows growth{scratch, unknown_bits, occupied_rows.data()};
-  const bool prefill = unknown_bits && room >= detail::grow_unknown_scratch_bytes(grid.dims);
+  detail::GrowthRows growth{scratch, own.unknown, occupied_rows.data()};
+  const bool prefill = own_written && room >= detail::grow_unknown_scratch_bytes(grid.dims);
+  std::uint8_t* const own_bytes = own_written ? nullptr : scratch + 3 * n;  // (a plugin's texture)
   UninitVector<std::uint8_t> states = detail::create_segments_and_own_states(
-      grid, blocks, params, own, rows ? &*rows : nullptr, prefill ? &growth : nullptr);
+      grid, blocks, params, own_bytes, rows ? &*rows : nullptr, prefill ? &growth : nullptr);
   rows.reset();
+  if (own_bytes)
+    detail::pack_own_bits(own_bytes, grid.dims, params.threads, ws.unknown_bits.data(), ws.occupied_bits.data());
   if (keep_stages) {
     r.blocks = blocks;
     r.created_states.assign(states.begin(), states.end());
@@ -184,10 +189,13 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   // The rest of the label array (3 bytes per voxel, before the own states) takes the unknown
   // growth's bit masks, then the rules': allocated apart, they raised the peak by 0.25 byte per
   // voxel.
-  detail::refine(states.data(), own, grid.dims, params, scratch, room, unknown_bits, &growth);
+  detail::refine(states.data(), own, grid.dims, params, scratch, room, &growth);
   if (params.preset == Preset::default_preset)
-    detail::apply_voxel_rules(states.data(), own, grid.dims, params, scratch, room, unknown_bits);
-  if (!workspace) local.unknown_bits = std::vector<std::uint64_t>();  // not at the labelling's peak
+    detail::apply_voxel_rules(states.data(), own, grid.dims, params, scratch, room);
+  if (!workspace) {  // not at the labelling's peak
+    local.unknown_bits = std::vector<std::uint64_t>();
+    local.occupied_bits = std::vector<std::uint64_t>();
+  }
   release_freed_memory();
   st.begin("labelling");
   // The states go in: they are freed inside, before the segment statistics.

@@ -12,7 +12,7 @@ namespace occseg {
 // (1/8 byte per voxel each).
 struct Workspace {
   std::vector<std::uint8_t> run_starts;
-  std::vector<std::uint64_t> unknown_bits;
+  std::vector<std::uint64_t> unknown_bits, occupied_bits;  // the own states (detail::OwnBits)
 };
 
 // segment(grid, params, keep_stages), writing the labels into `labels`' storage: when it holds

@@ -34,26 +34,29 @@ void expect_same_segments(const std::vector<Segment>& a, const std::vector<Segme
   }
 }
 
-// The own states' unknown voxels as bits, as segment() has the texture's pass write them
-// (detail::CellRows); every row kernel the processor has must give the same bits.
-std::vector<std::uint64_t> unknown_bits(const Grid& g) {
+// The own states as bits, as segment() has the texture's pass write them (detail::CellRows,
+// straight from the values): every row kernel the processor has must give the bits packed from
+// own_states()' bytes.
+detail::OwnBitsStore own_bits(const Grid& g) {
   const Dims& d = g.dims;
-  std::vector<std::uint64_t> first;
-  for (int kernel = 2; kernel >= 0; --kernel) {
-    std::vector<std::uint64_t> bits(d.ny * d.nz * ((d.nx + 63) / 64), ~std::uint64_t(0));
-    std::vector<std::uint8_t> own(d.count());
+  detail::OwnBitsStore want = detail::pack_own_bits(own_states(g, Params()).data(), d, 1);
+  for (int kernel = static_cast<int>(detail::TextureKernel::fastest); kernel >= 0; --kernel) {
+    std::vector<std::uint64_t> u(want.unknown.size(), ~std::uint64_t(0)), o(want.occupied.size(), ~std::uint64_t(0));
     float lo = 0, hi = 0;
     detail::float_bounds(Params().free_below, Params().occupied_above, lo, hi);
     detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
-    detail::CellRows rows(g, own.data(), lo, hi, bits.data());
+    detail::CellRows rows(g, nullptr, lo, hi, u.data(), o.data());
     detail::set_texture_kernel(detail::TextureKernel::fastest);
     for (std::size_t z = 0; z < d.nz; ++z)
       for (std::size_t y = 0; y < d.ny; ++y) rows.add_row(y, z);
-    if (first.empty()) first = bits;
-    EXPECT_EQ(bits, first) << "kernel " << kernel;
+    EXPECT_EQ(u, want.unknown) << "kernel " << kernel;
+    EXPECT_EQ(o, want.occupied) << "kernel " << kernel;
   }
-  return first;
+  return want;
 }
+
+// The own states' unknown voxels as bits (own_bits()).
+std::vector<std::uint64_t> unknown_bits(const Grid& g) { return own_bits(g).unknown; }
 
 bool same_blocks(const std::vector<Block>& a, const std::vector<Block>& b) {
   if (a.size() != b.size()) return false;
@@ -255,6 +258,32 @@ float band_value(test::Rng& r, double half) {
 }
 }  // namespace
 
+// The own states as bits from every row kernel (own_bits() checks them against the bytes), on
+// values at the band's float edges and one step either side of them, rows of 1 to 200 voxels
+// (the kernels' 64-voxel steps and their tails); the bytes themselves against the double
+// thresholds of Params.
+TEST(Reference, OwnBitsMatchAtTheBandEdges) {
+  float lo = 0, hi = 0;
+  detail::float_bounds(Params().free_below, Params().occupied_above, lo, hi);
+  const float values[] = {0.0f, std::nextafter(lo, 0.0f), lo, std::nextafter(lo, 1.0f), 0.5f,
+                          std::nextafter(hi, 0.0f), hi, std::nextafter(hi, 1.0f), 1.0f, 0.2f, 0.9f};
+  const Dims dims[] = {{1, 3, 2}, {7, 2, 3}, {63, 2, 2}, {64, 3, 2}, {65, 2, 3}, {130, 2, 2}, {200, 3, 3}};
+  test::Rng r(77);
+  int edges = 0;
+  for (const Dims& d : dims) {
+    Grid g(d, 0.5f);
+    for (float& v : g.p) v = values[r.below(11)];
+    const std::vector<std::uint8_t> own = own_states(g, Params());
+    for (std::size_t i = 0; i < own.size(); ++i) {
+      const double v = g.p[i];
+      ASSERT_EQ(own[i], v < Params().free_below ? 0 : (v > Params().occupied_above ? 2 : 1)) << v;
+      edges += g.p[i] == lo || g.p[i] == hi;
+    }
+    own_bits(g);
+  }
+  EXPECT_GT(edges, 100);
+}
+
 TEST(Reference, UnknownGrowthMatchesOnRandomStates) {
   const Dims dims[] = {{1, 1, 50}, {63, 3, 4}, {64, 5, 3}, {65, 4, 6}, {130, 3, 3}, {200, 7, 5}, {129, 1, 1}};
   std::uint64_t seed = 1;
@@ -303,12 +332,14 @@ TEST(Reference, UnknownGrowthMatchesOnRandomStates) {
     }
 }
 
-// The default rules on random own and created states, both row kernels (the hand-written AVX2
-// one, where the processor has it, for rows of 34 voxels or more, its last step overlapping the
-// one before; the compiler-vectorised one) against the reference: rows of 33 to 200 voxels,
-// regions of 0.5 voxels, gaps touching occupied voxels (the flood's seeds) on both row ends.
+// The default rules on random own and created states, every row kernel (the hand-written AVX-512
+// and AVX2 ones, where the processor has them, the AVX2 one for rows of 32 voxels or more, its
+// last step overlapping the one before; the portable one) on the own states as bits (from the map, as segment() has them)
+// and as bytes (the public stage) against the reference: rows of 31 to 200 voxels, regions of
+// 0.5 voxels, gaps touching occupied voxels (the flood's seeds) on both row ends.
 TEST(Reference, VoxelRulesMatchOnRandomStates) {
-  const Dims dims[] = {{33, 6, 5}, {34, 5, 4}, {35, 6, 5}, {64, 7, 3}, {65, 9, 4}, {97, 4, 6}, {200, 5, 5}};
+  const Dims dims[] = {{31, 5, 4}, {32, 4, 5}, {33, 6, 5}, {34, 5, 4}, {35, 6, 5},
+                       {64, 7, 3}, {65, 9, 4}, {97, 4, 6}, {200, 5, 5}};
   std::uint64_t seed = 40;
   std::size_t seeded_rows = 0;
   for (const Dims& d : dims)
@@ -326,27 +357,30 @@ TEST(Reference, VoxelRulesMatchOnRandomStates) {
       const std::vector<std::uint8_t> own = own_states(g, Params());
       for (std::size_t i = 0; i < st.size(); i += d.nx)  // a candidate seed at a row end
         seeded_rows += own[i] == 1 && st[i] == 0 && want[i] == 1;
-      for (bool vector_rows : {true, false}) {
-        detail::set_vector_rules(vector_rows);
+      for (int vector_rows = 0; vector_rows <= static_cast<int>(detail::TextureKernel::fastest); ++vector_rows) {
+        detail::set_texture_kernel(static_cast<detail::TextureKernel>(vector_rows));  // the rules' kernels follow it
         for (int threads : {1, 2}) {
           Params p;
           p.threads = threads;
+          const detail::OwnBitsStore bits = own_bits(g);
           std::vector<std::uint8_t> got = st;
-          detail::apply_voxel_rules(got.data(), own.data(), d, p, nullptr, 0);
+          detail::apply_voxel_rules(got.data(), bits.bits, d, p, nullptr, 0);
           EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " vector " << vector_rows
                                << " threads " << threads;
-          got = st;  // the opening from the unknown bits segment() has
-          detail::apply_voxel_rules(got.data(), own.data(), d, p, nullptr, 0, unknown_bits(g).data());
-          EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " from bits";
-          p.gap_radius = 0;  // no opening: the regions are the bits themselves
-          std::vector<std::uint8_t> plain = st;
+          got = st;  // the public stage: own states as bytes
+          apply_voxel_rules(got, own, d, p);
+          EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " from bytes";
+          p.gap_radius = 0;  // no opening: the regions are the 0.5 bits themselves
+          Params p0;
+          p0.gap_radius = 0;
+          std::vector<std::uint8_t> want0 = st;
+          reference::apply_voxel_rules(want0, g, p0);
           got = st;
-          detail::apply_voxel_rules(plain.data(), own.data(), d, p, nullptr, 0);
-          detail::apply_voxel_rules(got.data(), own.data(), d, p, nullptr, 0, unknown_bits(g).data());
-          EXPECT_EQ(got, plain) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " radius 0 from bits";
+          detail::apply_voxel_rules(got.data(), bits.bits, d, p, nullptr, 0);
+          EXPECT_EQ(got, want0) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " radius 0";
         }
       }
-      detail::set_vector_rules(true);
+      detail::set_texture_kernel(detail::TextureKernel::fastest);
     }
   EXPECT_GT(seeded_rows, 10u);
 }

@@ -30,10 +30,5 @@ std::vector<std::uint8_t> unknown_regions(const std::vector<std::uint8_t>& own, 
 void apply_voxel_rules(std::vector<std::uint8_t>& states, const std::vector<std::uint8_t>& own, const Dims& dims,
                        const Params& params);
 
-namespace detail {
-// For tests and benchmarks: false applies the rules to rows with the compiler-vectorised code
-// even where the processor has AVX2 (both give identical states). Process-wide.
-void set_vector_rules(bool enabled);
-}  // namespace detail
 
 }  // namespace occseg
