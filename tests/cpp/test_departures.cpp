@@ -37,14 +37,15 @@ TEST(Departures, RegionAtTheMapEdgeSurvives) {
 // The bit-mask opening against its definition, computed voxel by voxel: a 0.5 voxel is in a
 // region when some cube of edge 2r + 1 around a centre within r of it (centre inside the map)
 // holds only 0.5 voxels, the outside counting as 0.5. Rows of 1, 63, 64, 65 and 130 voxels
-// (word boundaries of the bit rows), radii 1-3, random masks of several densities.
+// (word boundaries of the bit rows), radii 1-3, random masks of several densities, 1 to 5 threads
+// (each takes a stretch of planes and computes the planes around it again: deeper maps too).
 TEST(Departures, UnknownRegionsMatchTheirDefinition) {
   std::uint64_t seed = 12345;
   auto next = [&] {
     seed = seed * 6364136223846793005ull + 1442695040888963407ull;
     return static_cast<unsigned>(seed >> 33);
   };
-  const Dims shapes[] = {{1, 9, 7}, {63, 5, 6}, {64, 4, 7}, {65, 7, 3}, {130, 3, 5}, {70, 1, 1}};
+  const Dims shapes[] = {{1, 9, 7}, {63, 5, 6}, {64, 4, 7}, {65, 7, 3}, {130, 3, 5}, {70, 1, 1}, {20, 4, 23}, {9, 3, 31}};
   for (const Dims& d : shapes)
     for (int r = 1; r <= 3; ++r)
       for (unsigned density : {50u, 85u, 97u}) {
@@ -52,8 +53,13 @@ TEST(Departures, UnknownRegionsMatchTheirDefinition) {
         for (float& v : g.p) v = next() % 100 < density ? 0.5f : 0.2f;
         Params prm;
         prm.gap_radius = r;
-        prm.threads = 2;
-        const auto m = unknown_regions(g, prm);
+        std::vector<std::vector<std::uint8_t>> by_threads;
+        for (int t : {1, 2, 3, 5}) {
+          prm.threads = t;
+          by_threads.push_back(unknown_regions(g, prm));
+        }
+        const auto& m = by_threads[1];
+        for (std::size_t k = 0; k < by_threads.size(); ++k) EXPECT_EQ(by_threads[k], m) << "thread counts " << k;
         const long nx = long(d.nx), ny = long(d.ny), nz = long(d.nz);
         auto half = [&](long x, long y, long z) {
           if (x < 0 || y < 0 || z < 0 || x >= nx || y >= ny || z >= nz) return true;
