@@ -9,6 +9,7 @@
 #include "occseg/grid.hpp"
 #include "occseg/params.hpp"
 #include "occseg/uninit_vector.hpp"
+#include "bit_rows_internal.hpp"
 
 #ifdef __SSE2__
 #include <emmintrin.h>
@@ -50,8 +51,8 @@ inline void own_states_of(const float* p, std::size_t n, float lo, float hi, std
 // and the default rules read these instead of a byte per voxel: segment() has the texture's first
 // pass write them from the map (CellRows), so no own state is ever written as a byte there.
 struct OwnBits {
-  const std::uint64_t* unknown = nullptr;
-  const std::uint64_t* occupied = nullptr;
+  const word_t* unknown = nullptr;  // (word_t: the words may live in the label array)
+  const word_t* occupied = nullptr;
   std::size_t words = 0;  // per row: ceil(nx / 64)
   // The own state (State's value: 0 free, 1 unknown, 2 occupied) of voxel x of row r.
   std::uint8_t at(std::size_t r, std::size_t x) const {
@@ -125,7 +126,7 @@ UninitVector<std::uint8_t> create_segments_and_own_states(const Grid& grid, cons
 // and its byte of `occupied_rows` (an occupied voxel in the row).
 struct GrowthRows {
   std::uint8_t* scratch = nullptr;              // 8-byte aligned, grow_unknown_scratch_bytes()
-  const std::uint64_t* unknown_bits = nullptr;  // CellRows' bits of the own states' unknown voxels
+  const word_t* unknown_bits = nullptr;  // CellRows' bits of the own states' unknown voxels
   std::uint8_t* occupied_rows = nullptr;        // one byte per row (refine() fills it if not)
   bool filled = false;                          // set by the creation when it wrote them
 };

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "occseg/parallel.hpp"
 #include "huge_pages.hpp"
@@ -36,6 +37,33 @@ void classify_own(const std::uint8_t* own, int n, std::uint8_t from, bool* reass
   if (!other) return;  // cases i and ii
   for (int k = 0; k < n; ++k)
     reassign[k] = !own_side || ((from == kFree) ? own[k] != kOccupied : own[k] != kFree);  // iii / iv
+}
+
+// classify_own() on a window of n voxels entered from state `from` (free or occupied), voxel w at
+// pos(w) = (row, x) of `own`: the occupied bits first, which alone decide most windows (into an
+// object whose voxels are all occupied, or out of one into free space with none: no evidence for
+// `from`, nothing moves), the unknown bits only for the others (boundary scans 2.1-2.4 -> 2.0-2.1
+// ms on the scene).
+template <class Pos>
+void classify_window(const OwnBits& own, int n, std::uint8_t from, bool* reassign, Pos&& pos) {
+  std::uint8_t occupied[kMaxLook];
+  bool any = false, all = true;
+  for (int k = 0; k < n; ++k) {
+    const auto [r, x] = pos(k);
+    occupied[k] = static_cast<std::uint8_t>((own.occupied[r * own.words + x / 64] >> (x % 64)) & 1u);
+    any = any || occupied[k];
+    all = all && occupied[k];
+  }
+  if (from == kFree ? all : !any) {  // no voxel at the other side of the band from `from`
+    std::fill(reassign, reassign + n, false);
+    return;
+  }
+  std::uint8_t win[kMaxLook];
+  for (int k = 0; k < n; ++k) {
+    const auto [r, x] = pos(k);
+    win[k] = occupied[k] ? kOccupied : own.at(r, x);
+  }
+  classify_own(win, n, from, reassign);
 }
 
 inline bool is_boundary(std::uint8_t a, std::uint8_t s) {
@@ -86,18 +114,17 @@ void boundary_row(std::uint8_t* st, const OwnBits& own, std::size_t r, std::size
   if (!any_boundary(st, st + 1, len - 1)) return;  // windows only ever start at a boundary
   const std::ptrdiff_t stride = step;
   std::uint8_t* first = step > 0 ? st : st + len - 1;
-  std::uint8_t win[kMaxLook];
   bool re[kMaxLook];
   std::size_t k = 1;
   while ((k = next_boundary(st, k, len, step)) < len) {
     std::uint8_t* c = first + static_cast<std::ptrdiff_t>(k) * stride;
     const std::uint8_t a = c[-stride], s = c[0];
     int n = 0;
-    while (n < look && k + n < len && c[n * stride] == s) {
-      win[n] = own.at(r, step > 0 ? k + n : len - 1 - (k + n));
-      ++n;
-    }
-    classify_own(win, n, a, re);
+    while (n < look && k + n < len && c[n * stride] == s) ++n;
+    classify_window(own, n, a, re, [&](int w) {
+      const std::size_t q = k + static_cast<std::size_t>(w);
+      return std::pair<std::size_t, std::size_t>(r, step > 0 ? q : len - 1 - q);
+    });
     for (int w = 0; w < n; ++w)
       if (re[w]) c[w * stride] = a;
     k += static_cast<std::size_t>(n);  // resume after the window: no cascade through it
@@ -124,16 +151,13 @@ inline Plane plane_shape(const Dims& d, int axis) {
 inline std::uint8_t plane_window(std::uint8_t* cur, const OwnBits& own, std::size_t orow, std::ptrdiff_t ors,
                                  std::size_t x, std::ptrdiff_t rs, std::size_t k, std::size_t rows, int look,
                                  std::uint8_t a, std::uint8_t* occ_k, std::ptrdiff_t fs) {
-  std::uint8_t win[kMaxLook];
   bool re[kMaxLook];
   const std::uint8_t s = cur[x];
-  win[0] = own.at(orow, x);  // the boundary voxel itself always belongs
-  int n = 1;
-  while (n < look && k + n < rows && cur[static_cast<std::ptrdiff_t>(x) + n * rs] == s) {
-    win[n] = own.at(static_cast<std::size_t>(static_cast<std::ptrdiff_t>(orow) + n * ors), x);
-    ++n;
-  }
-  classify_own(win, n, a, re);
+  int n = 1;  // the boundary voxel itself always belongs
+  while (n < look && k + n < rows && cur[static_cast<std::ptrdiff_t>(x) + n * rs] == s) ++n;
+  classify_window(own, n, a, re, [&](int w) {
+    return std::pair<std::size_t, std::size_t>(static_cast<std::size_t>(static_cast<std::ptrdiff_t>(orow) + w * ors), x);
+  });
   for (int w = 0; w < n; ++w)
     if (re[w]) {
       cur[static_cast<std::ptrdiff_t>(x) + w * rs] = a;

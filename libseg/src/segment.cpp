@@ -128,10 +128,12 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   // The label array holds the stages' per-voxel scratch until the labelling writes the labels:
   // the texture codes (bytes [0, 2n)) through the division, with the texture's LBP codes in
   // [2n, 3n) while it runs; the refinement's bit masks take [0, 3n) once the codes are counted.
-  // The voxels' own states are bits (detail::OwnBits, 1/4 byte per voxel) from the texture's
-  // first pass; with a plugin's texture the creation writes them as bytes into [3n, 4n) first. It is allocated (or recycled) once and paged in once; separate arrays cost more
-  // allocations, zero-fills and page-ins (docs/performance.md, "Fourth round"). Peak: the labels
-  // and the states (5 bytes per voxel); a recycled array does not add to it.
+  // The voxels' own states are bits (detail::OwnBits, 1/4 byte per voxel) in [3n, 4n) from the
+  // texture's first pass through the rules; with a plugin's texture the creation writes them as
+  // bytes into [3n, 4n), packed into bits of the workspace. The array is allocated (or recycled)
+  // once and paged in once; separate arrays cost more allocations, zero-fills and page-ins
+  // (docs/performance.md, "Fourth round"). Peak: the labels and the states (5 bytes per voxel);
+  // a recycled array does not add to it.
   const std::size_t n = grid.dims.count();
   detail::check_labels_fit(n);  // before any stage allocates: the labels could not hold the result
   std::vector<Block> blocks;
@@ -140,10 +142,18 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   std::optional<detail::CellRows> rows;  // the map's rows as the texture read them, for the creation
   Workspace local;
   Workspace& ws = workspace ? *workspace : local;
+  // The own states' bits: in the label array's last quarter (nothing allocated, nothing held by a
+  // context between calls) when the texture's pass writes them and they fit (not for maps a few
+  // voxels wide: a word per row), else in the workspace.
   const std::size_t words = (grid.dims.nx + 63) / 64, bit_words = grid.dims.ny * grid.dims.nz * words;
-  ws.unknown_bits.resize(bit_words);  // every word is written
-  ws.occupied_bits.resize(bit_words);
-  const detail::OwnBits own{ws.unknown_bits.data(), ws.occupied_bits.data(), words};
+  detail::OwnBits own{nullptr, nullptr, words};
+  detail::word_t *unknown = nullptr, *occupied = nullptr;  // (own's words, writable)
+  const auto in_workspace = [&] {
+    ws.unknown_bits.resize(bit_words);  // every word is written
+    ws.occupied_bits.resize(bit_words);
+    unknown = ws.unknown_bits.data();
+    occupied = ws.occupied_bits.data();
+  };
   bool own_written = false;  // by the texture's first pass
   st.begin("texture");
   if (op && op->native_into) {
@@ -153,7 +163,14 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
     touch_pages(r.labels.data(), n * sizeof(std::uint32_t), params.threads);
     // codes in bytes [0, 2n), the operator's scratch (LBP codes) in [2n, 3n), own states as bits
     std::uint8_t* const bytes = reinterpret_cast<std::uint8_t*>(r.labels.data());
-    rows.emplace(grid, nullptr, own_lo, own_hi, ws.unknown_bits.data(), ws.occupied_bits.data());
+    const std::size_t at = (3 * n + 63) / 64 * 64;  // (the array starts on a page)
+    if (at + 2 * bit_words * sizeof(std::uint64_t) <= 4 * n) {
+      unknown = reinterpret_cast<detail::word_t*>(bytes + at);
+      occupied = unknown + bit_words;
+    } else {
+      in_workspace();
+    }
+    rows.emplace(grid, nullptr, own_lo, own_hi, unknown, occupied);
     own_written = true;
     const int codes = op->native_into(grid, params, reinterpret_cast<std::uint16_t*>(bytes), bytes + 2 * n, &*rows);
     st.begin("division");
@@ -166,7 +183,10 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
     tex = TextureMap();
     release_freed_memory();
     resize_huge(r.labels, n);
+    in_workspace();
   }
+  own.unknown = unknown;
+  own.occupied = occupied;
   st.begin("creation");
   std::uint8_t* const scratch = reinterpret_cast<std::uint8_t*>(r.labels.data());
   // The growth's masks go where it keeps them (the label array's first bytes, free once the
@@ -180,7 +200,7 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
       grid, blocks, params, own_bytes, rows ? &*rows : nullptr, prefill ? &growth : nullptr);
   rows.reset();
   if (own_bytes)
-    detail::pack_own_bits(own_bytes, grid.dims, params.threads, ws.unknown_bits.data(), ws.occupied_bits.data());
+    detail::pack_own_bits(own_bytes, grid.dims, params.threads, unknown, occupied);
   if (keep_stages) {
     r.blocks = blocks;
     r.created_states.assign(states.begin(), states.end());

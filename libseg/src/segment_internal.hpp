@@ -12,7 +12,9 @@ namespace occseg {
 // (1/8 byte per voxel each).
 struct Workspace {
   std::vector<std::uint8_t> run_starts;
-  std::vector<std::uint64_t> unknown_bits, occupied_bits;  // the own states (detail::OwnBits)
+  // The own states (detail::OwnBits) when the label array cannot hold them (a plugin's texture,
+  // maps a few voxels wide).
+  std::vector<std::uint64_t> unknown_bits, occupied_bits;
 };
 
 // segment(grid, params, keep_stages), writing the labels into `labels`' storage: when it holds
