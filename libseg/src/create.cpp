@@ -385,6 +385,7 @@ bool create_by_rows(const Grid& grid, const std::vector<Block>& blocks, const Pa
   // word i of a row holds cells 8i .. 8i + 7 (static_assert below), each byte 0xFF or 0.
   static_assert(kMeanCell == 8, "a cell must be one byte of the growth's mask words");
   const std::size_t words = (d.nx + 63) / 64;
+  const bool defer = growth && growth->defer_states;  // the growth writes the states
   detail::word_t* const W = growth ? reinterpret_cast<detail::word_t*>(growth->scratch) : nullptr;
   detail::word_t* const C = W ? W + d.ny * d.nz * words : nullptr;
   const std::uint64_t last = d.nx % 64 ? (std::uint64_t(1) << (d.nx % 64)) - 1 : ~std::uint64_t(0);
@@ -396,13 +397,15 @@ bool create_by_rows(const Grid& grid, const std::vector<Block>& blocks, const Pa
     for (std::size_t r = r0; r < r1; ++r) {
       const std::size_t cr = r % d.ny / c + ncy * (r / d.ny / c);
       const std::uint8_t* cs = cell_state.data() + ncx * cr;
-      std::uint8_t* row = states + d.nx * r;
-      std::size_t cx = 0;
-      for (; (cx + 1) * c <= d.nx; ++cx) {  // one 8-byte store per cell
-        const std::uint64_t eight = 0x0101010101010101ull * cs[cx];
-        std::memcpy(row + cx * c, &eight, c);
+      if (!defer) {
+        std::uint8_t* row = states + d.nx * r;
+        std::size_t cx = 0;
+        for (; (cx + 1) * c <= d.nx; ++cx) {  // one 8-byte store per cell
+          const std::uint64_t eight = 0x0101010101010101ull * cs[cx];
+          std::memcpy(row + cx * c, &eight, c);
+        }
+        if (cx < ncx) std::memset(row + cx * c, cs[cx], d.nx - cx * c);
       }
-      if (cx < ncx) std::memset(row + cx * c, cs[cx], d.nx - cx * c);
       if (!W) continue;
       if (cr != cells_row) {
         cells_row = cr;
@@ -423,6 +426,10 @@ bool create_by_rows(const Grid& grid, const std::vector<Block>& blocks, const Pa
     }
   });
   if (growth) growth->filled = true;
+  if (defer) {
+    cell_state.resize(cell_state.size() + 4);  // (the growth reads 4 cells at a time)
+    growth->cell_states = std::move(cell_state);
+  }
   return true;
 }
 

@@ -124,11 +124,19 @@ UninitVector<std::uint8_t> create_segments_and_own_states(const Grid& grid, cons
 // word, no reading of the states back): for every row, W (state unknown) and C (state free and
 // own state unknown) in `scratch` as grow_unknown() keeps them (grow_unknown_scratch_bytes()),
 // and its byte of `occupied_rows` (an occupied voxel in the row).
+//
+// With `defer_states`, the creation leaves the states themselves to the growth, which writes each
+// row once from its cells' states and the grown voxels (instead of the creation writing every
+// row and the growth rewriting a third of them): `cell_states` then holds every cell's state.
 struct GrowthRows {
-  std::uint8_t* scratch = nullptr;              // 8-byte aligned, grow_unknown_scratch_bytes()
-  const word_t* unknown_bits = nullptr;  // CellRows' bits of the own states' unknown voxels
-  std::uint8_t* occupied_rows = nullptr;        // one byte per row (refine() fills it if not)
-  bool filled = false;                          // set by the creation when it wrote them
+  std::uint8_t* scratch = nullptr;        // 8-byte aligned, grow_unknown_scratch_bytes()
+  const word_t* unknown_bits = nullptr;   // CellRows' bits of the own states' unknown voxels
+  std::uint8_t* occupied_rows = nullptr;  // one byte per row (refine() fills it if not)
+  bool filled = false;                    // set by the creation when it wrote them
+  bool defer_states = false;              // asked by the caller
+  // By the creation when it deferred the states: cell (cx, cy, cz) at cx + ncx * (cy + ncy * cz)
+  // (ncx, ncy: cells along x and y, kMeanCell voxels each), 4 bytes of padding after the last.
+  std::vector<std::uint8_t> cell_states;
 };
 // For tests: the block means as creation sums them when the blocks tile the map on the lattice of
 // kMeanCell^3 cells (row by row, into the cells' sums); empty for other blocks.
@@ -147,9 +155,12 @@ std::size_t grow_unknown_scratch_bytes(const Dims& dims);
 // occupied voxel.
 // With `packed` (GrowthRows filled by the creation), scratch and occupied_rows hold every row's
 // masks and flag already: the states are not read before the scans.
+// With `cell_states` (GrowthRows' deferred states; `packed` too), the states are not read or
+// written before: every row is written at the end from its cells' states and the grown voxels.
 void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& dims, int threads,
                   std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits = nullptr,
-                  std::uint8_t* occupied_rows = nullptr, bool packed = false);
+                  std::uint8_t* occupied_rows = nullptr, bool packed = false,
+                  const std::uint8_t* cell_states = nullptr);
 
 // refine_unknown() then refine_boundaries(), the masks of the first in `scratch` if it has room;
 // `growth` (its scratch the same as `scratch`), when the creation filled it.

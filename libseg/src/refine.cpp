@@ -369,7 +369,8 @@ void detail::refine(std::uint8_t* st, const OwnBits& own, const Dims& d, const P
   const bool packed = growth && growth->filled && growth->scratch == scratch;
   std::vector<std::uint8_t> own_flags(growth ? 0 : d.ny * d.nz);  // (growth has room for them)
   std::uint8_t* const occupied_rows = growth ? growth->occupied_rows : own_flags.data();
-  grow_unknown(st, nullptr, d, params.threads, scratch, scratch_bytes, own.unknown, occupied_rows, packed);
+  grow_unknown(st, nullptr, d, params.threads, scratch, scratch_bytes, own.unknown, occupied_rows, packed,
+               packed && !growth->cell_states.empty() ? growth->cell_states.data() : nullptr);
   run_sweeps(st, own, d, params.threads, lookahead_of(params), boundary_sweeps(params), occupied_rows);
 }
 

@@ -193,7 +193,11 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   // codes are counted), written by the creation if it can (GrowthRows).
   const std::size_t room = 3 * n;
   std::vector<std::uint8_t> occupied_rows(grid.dims.ny * grid.dims.nz);
-  detail::GrowthRows growth{scratch, own.unknown, occupied_rows.data()};
+  detail::GrowthRows growth;
+  growth.scratch = scratch;
+  growth.unknown_bits = own.unknown;
+  growth.occupied_rows = occupied_rows.data();
+  growth.defer_states = !keep_stages;  // (the created states are kept as they were created)
   const bool prefill = own_written && room >= detail::grow_unknown_scratch_bytes(grid.dims);
   std::uint8_t* const own_bytes = own_written ? nullptr : scratch + 3 * n;  // (a plugin's texture)
   UninitVector<std::uint8_t> states = detail::create_segments_and_own_states(

@@ -10,12 +10,15 @@
 // states) before scanning it: 5.5 of the scene's 13.5 ms of refinement, 2.6 now
 // (docs/performance.md, "Fifth round").
 #include <algorithm>
+#include <cstring>
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
 #endif
 
+#include "occseg/create.hpp"
 #include "occseg/parallel.hpp"
+#include "occseg/texture.hpp"
 #include "bit_rows_internal.hpp"
 #include "cpu_features.hpp"
 #include "own_states_internal.hpp"
@@ -149,6 +152,46 @@ bool grow_from(const word_t* prev_w, word_t* w, word_t* c, std::size_t words) {
   return grown != 0;
 }
 
+// Byte i of the result 0xFF where bit i of b (i < 8) is set, else 0.
+inline std::uint64_t spread_bits(std::uint64_t b) {
+  const std::uint64_t x = (b * 0x0101010101010101ull) & 0x8040201008040201ull;  // byte i: bit i
+  return (((x | (x + 0x7F7F7F7F7F7F7F7Full)) & 0x8080808080808080ull) >> 7) * 0xFF;
+}
+
+// Voxels [x0, nx) of a row (x0 a multiple of 8) from its cells' states cs (kMeanCell = 8 voxels
+// each) and its bits w (the growth's unknown voxels, every voxel of an unknown cell among them):
+// unknown where w has a bit, the cell's state elsewhere.
+static_assert(occseg::kMeanCell == 8, "a cell must be one byte of the growth's mask words");
+void write_row(const std::uint8_t* cs, const word_t* w, std::size_t x0, std::size_t nx, std::uint8_t* st) {
+  std::size_t cx = x0 / 8;
+  for (; (cx + 1) * 8 <= nx; ++cx) {
+    const std::uint64_t unknown = spread_bits((w[cx / 8] >> (8 * (cx % 8))) & 0xFF);
+    const std::uint64_t v = ((0x0101010101010101ull * cs[cx]) & ~unknown) | (0x0101010101010101ull * kUnknown & unknown);
+    std::memcpy(st + 8 * cx, &v, 8);
+  }
+  for (std::size_t x = 8 * cx; x < nx; ++x) st[x] = ((w[x / 64] >> (x % 64)) & 1u) ? kUnknown : cs[cx];
+}
+
+#ifdef OCCSEG_GROWTH_AVX2
+// write_row() 32 voxels (4 cells) per step; cs is read 4 cells at a time (padded by the creation).
+__attribute__((target("avx2"))) void write_row_avx2(const std::uint8_t* cs, const word_t* w, std::size_t nx,
+                                                    std::uint8_t* st) {
+  // byte i of a 128-bit half takes cell i / 8 of the four (the low half cells 0, 1; the high 2, 3)
+  const __m256i pick = _mm256_setr_epi8(0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1, 1, 2, 2, 2, 2, 2, 2, 2, 2, 3, 3,
+                                        3, 3, 3, 3, 3, 3);
+  const __m256i unknown = _mm256_set1_epi8(static_cast<char>(kUnknown));
+  std::size_t x = 0;
+  for (; x + 32 <= nx; x += 32) {
+    std::uint32_t four;
+    std::memcpy(&four, cs + x / 8, 4);
+    const __m256i cells = _mm256_shuffle_epi8(_mm256_set1_epi32(static_cast<int>(four)), pick);
+    const __m256i v = _mm256_blendv_epi8(cells, unknown, bytes_of_bits32(w, x));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(st + x), v);
+  }
+  write_row(cs, w, x, nx, st);
+}
+#endif
+
 }  // namespace
 
 std::size_t grow_unknown_scratch_bytes(const Dims& d) {
@@ -157,7 +200,7 @@ std::size_t grow_unknown_scratch_bytes(const Dims& d) {
 
 void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& d, int threads,
                   std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits,
-                  std::uint8_t* occupied_rows, bool packed) {
+                  std::uint8_t* occupied_rows, bool packed, const std::uint8_t* cell_states) {
   const word_t* const ubits = reinterpret_cast<const word_t*>(unknown_bits);
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, rows = ny * nz, words = (nx + 63) / 64;
   std::vector<std::uint64_t> own_words;
@@ -217,6 +260,24 @@ void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& d, 
         if (grow_from(row_w(y + ny * (z + 1)), row_w(y + ny * z), row_c(y + ny * z), words)) grew[y + ny * z] = 1;
     }
   });
+  if (cell_states && packed) {  // every row, written once (the creation left them)
+    const std::size_t ncx = (nx + 7) / 8, ncy = (ny + 7) / 8;
+#ifdef OCCSEG_GROWTH_AVX2
+    // (following set_texture_kernel(), so that the tests run both)
+    const bool avx2_rows = avx2 && texture_kernel() >= TextureKernel::avx2;
+#endif
+    parallel_for_dynamic(rows, threads, [&](std::size_t r0, std::size_t r1) {
+      for (std::size_t r = r0; r < r1; ++r) {
+        const std::uint8_t* cs = cell_states + ncx * (r % ny / 8 + ncy * (r / ny / 8));
+#ifdef OCCSEG_GROWTH_AVX2
+        if (avx2_rows) write_row_avx2(cs, row_w(r), nx, st + nx * r);
+        else
+#endif
+          write_row(cs, row_w(r), 0, nx, st + nx * r);
+      }
+    });
+    return;
+  }
   // Back into the states, rows that grew only.
   parallel_for_dynamic(rows, threads, [&](std::size_t r0, std::size_t r1) {
     for (std::size_t r = r0; r < r1; ++r)

@@ -115,6 +115,18 @@ TEST(Reference, WholePipelineMatchesForBothPresets) {
         EXPECT_EQ(r.labels, ref.labels) << what;
         expect_same_segments(r.segments, ref.segments, what);
       }
+      // Without the stages kept, the creation leaves the states to the unknown growth, which
+      // writes each row once (every row kernel).
+      p.threads = 2;
+      for (int kernel = 0; kernel <= static_cast<int>(detail::TextureKernel::fastest); ++kernel) {
+        detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
+        const Result r = segment(g, p);
+        const std::string what = std::string(preset_name(p.preset)) + " seed " + std::to_string(c.seed) +
+                                 " kernel " + std::to_string(kernel) + " without the stages";
+        EXPECT_EQ(r.labels, ref.labels) << what;
+        expect_same_segments(r.segments, ref.segments, what);
+      }
+      detail::set_texture_kernel(detail::TextureKernel::fastest);
     }
   }
 }
