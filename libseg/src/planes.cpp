@@ -419,15 +419,20 @@ class Splitter {
 
   // Examines segment `s`. Its voxels are [first, last) in scan order when the caller bucketed
   // them, else (first = nullptr) they are found by scanning its box.
-  // fit_dominant_plane() in two steps. The first, search(), finds the plane of s's sample and
-  // rejects a segment whose sample shows no plane near half of it (a sprawling noisy region)
-  // before its voxels are even listed. It reads the labels and the segment table only, into
-  // buffers of its own, so several segments may be searched at once while none is being split.
+  // fit_dominant_plane() and the split in two steps. The first, search(), finds the plane of s's
+  // sample and rejects a segment whose sample shows no plane near half of it (a sprawling noisy
+  // region) before its voxels are even listed; then the refits over all of s's voxels and the
+  // side free space is seen from. It reads the labels and the segment table only, into buffers of
+  // its own, so several segments may be searched at once while none is being split (the refits
+  // and the sides were 0.74 of the serial splits' 1 ms on the scene).
   struct Found {
-    bool plane = false;
+    bool split = false;  // a plane to split at: refined, holding half of s, seen from one side
     Plane pl;
+    int open = 0;  // open_side()
+    double min_height = 0;
   };
-  Found search(std::uint32_t s, const std::uint32_t* first, const std::uint32_t* last, int threads) const {
+  Found search(std::uint32_t s, const std::uint32_t* first, const std::uint32_t* last, std::size_t min_plane,
+               int threads) const {
     const std::size_t n = first ? static_cast<std::size_t>(last - first) : segs_[s].voxels;
     std::vector<std::size_t> ranks;
     for_sample(n, [&](std::size_t i) { ranks.push_back(i); });
@@ -435,34 +440,37 @@ class Splitter {
     std::uint32_t first_voxel = 0;
     collect_sample(s, first, ranks, first_voxel, pts);
     Found f;
-    f.plane = sample_plane(pts, 0x6F6363736567ull ^ (std::uint64_t(first_voxel) * 0x9E3779B97F4A7C15ull), f.pl,
-                           threads) &&
-              10 * count_inliers(pts, f.pl) >= 4 * pts.size();  // under 40 %: far from half
+    Plane pl;
+    if (!sample_plane(pts, 0x6F6363736567ull ^ (std::uint64_t(first_voxel) * 0x9E3779B97F4A7C15ull), pl, threads) ||
+        10 * count_inliers(pts, pl) < 4 * pts.size())  // under 40 %: far from half
+      return f;
+    std::vector<std::uint32_t> members;
+    list_members(s, first, last, members);
+    std::vector<Vec> all(n);
+    for (std::size_t m = 0; m < n; ++m) all[m] = coords(members[m]);
+    const std::size_t inliers = refine_plane(all, pl);
+    if (inliers < min_plane || 2 * inliers < n) return f;
+    f.open = open_side(s, pl, all);
+    if (f.open == 0) return f;
+    f.min_height = std::max(kMinObjectHeight, kNoiseHeights * surface_sigma(pl, all));
+    f.pl = pl;
+    f.split = true;
     return f;
   }
 
-  // The second step with what search() found for s: the refits over all its voxels, then the
-  // split itself.
-  void split(std::uint32_t s, std::size_t min_plane, const std::uint32_t* first, const std::uint32_t* last,
-             const Found& found) {
-    if (!found.plane) return;
-    const std::size_t n = first ? static_cast<std::size_t>(last - first) : segs_[s].voxels;
-    Plane pl = found.pl;
-    list_members(s, first, last);
-    pts_.resize(n);
-    for (std::size_t m = 0; m < n; ++m) pts_[m] = coords(members_[m]);
-    const std::size_t inliers = refine_plane(pts_, pl);
-    if (inliers < min_plane || 2 * inliers < n) return;
-    const int open = open_side(s, pl);
-    if (open == 0) return;
-    plane_ = pl;
-    const double min_height = std::max(kMinObjectHeight, kNoiseHeights * surface_sigma(pl));
+  // The second step with what search() found for s: the split itself.
+  void split(std::uint32_t s, const std::uint32_t* first, const std::uint32_t* last, const Found& found) {
+    if (!found.split) return;
+    list_members(s, first, last, members_);
+    pts_.resize(members_.size());
+    for (std::size_t m = 0; m < members_.size(); ++m) pts_[m] = coords(members_[m]);
+    plane_ = found.pl;
     make_pieces(s);
     std::vector<std::size_t> split;
     for (std::size_t k = 0; k < pieces_.size(); ++k) {
       const Piece& p = pieces_[k];
-      const double height = open > 0 ? p.distance_max : -p.distance_min;
-      if (!p.on_plane && p.voxels >= kMinObjectVoxels && open * p.distance_sum > 0 && height >= min_height)
+      const double height = found.open > 0 ? p.distance_max : -p.distance_min;
+      if (!p.on_plane && p.voxels >= kMinObjectVoxels && found.open * p.distance_sum > 0 && height >= found.min_height)
         split.push_back(k);
     }
     if (split.empty()) {
@@ -519,13 +527,14 @@ class Splitter {
       }
   }
 
-  // members_ = the voxels of s in scan order: the bucket, or a scan of its box.
-  void list_members(std::uint32_t s, const std::uint32_t* first, const std::uint32_t* last) {
+  // members = the voxels of s in scan order: the bucket, or a scan of its box.
+  void list_members(std::uint32_t s, const std::uint32_t* first, const std::uint32_t* last,
+                    std::vector<std::uint32_t>& members) const {
     if (first) {
-      members_.assign(first, last);
+      members.assign(first, last);
       return;
     }
-    members_.clear();
+    members.clear();
     const Segment& seg = segs_[s];
     const std::size_t x0 = seg.bbox_min[0], x1 = seg.bbox_max[0] + 1;
     std::vector<std::uint64_t> bits((x1 - x0 + 63) / 64);
@@ -535,17 +544,17 @@ class Splitter {
         if (!row_members(labels_.data() + row, x0, x1, s, bits.data())) continue;
         for (std::size_t k = 0; k < bits.size(); ++k)
           for (std::uint64_t w = bits[k]; w; w &= w - 1)
-            members_.push_back(static_cast<std::uint32_t>(row + x0 + 64 * k + static_cast<std::size_t>(__builtin_ctzll(w))));
+            members.push_back(static_cast<std::uint32_t>(row + x0 + 64 * k + static_cast<std::size_t>(__builtin_ctzll(w))));
       }
   }
 
   // +1 or -1: the side of the plane (along n) on which its voxels see free space, counted one to
   // three voxels away along the normal, past the plane's own thickness; 0 when neither side has
   // at least twice the free sightings of the other (a plane seen from both sides, or not at all).
-  int open_side(std::uint32_t s, const Plane& pl) const {
+  // (pts: the coordinates of s's voxels.)
+  int open_side(std::uint32_t s, const Plane& pl, const std::vector<Vec>& pts) const {
     std::size_t seen[2] = {0, 0};
-    for (std::size_t m = 0; m < members_.size(); ++m) {
-      const Vec& c = pts_[m];
+    for (const Vec& c : pts) {
       if (std::fabs(pl.distance(c[0], c[1], c[2])) > kPlaneInlierDistance) continue;
       for (int side = 0; side < 2; ++side) {
         const double sign = side == 0 ? 1.0 : -1.0;
@@ -566,9 +575,9 @@ class Splitter {
   // Robust spread of the plane's surface along its normal: 1.4826 x the median |distance| of the
   // voxels within 4 voxel edges of it (a normal distribution's sigma; objects far above do not
   // count).
-  double surface_sigma(const Plane& pl) const {
+  double surface_sigma(const Plane& pl, const std::vector<Vec>& pts) const {
     std::vector<double> near;
-    for (const Vec& c : pts_) {
+    for (const Vec& c : pts) {
       const double e = std::fabs(pl.distance(c[0], c[1], c[2]));
       if (e <= 4.0) near.push_back(e);
     }
@@ -794,13 +803,12 @@ void split_support_planes(const Grid& grid, LabelArray& labels, std::vector<Segm
   std::vector<Splitter::Found> found(candidates.size());
   if (resolve_threads(threads) > 1 && candidates.size() > 1)
     parallel_for_dynamic(candidates.size(), threads, [&](std::size_t k0, std::size_t k1) {
-      for (std::size_t k = k0; k < k1; ++k) found[k] = splitter.search(candidates[k], first(k), last(k), 1);
+      for (std::size_t k = k0; k < k1; ++k) found[k] = splitter.search(candidates[k], first(k), last(k), min_plane, 1);
     });
   else
     for (std::size_t k = 0; k < candidates.size(); ++k)
-      found[k] = splitter.search(candidates[k], first(k), last(k), threads);
-  for (std::size_t k = 0; k < candidates.size(); ++k)
-    splitter.split(candidates[k], min_plane, first(k), last(k), found[k]);
+      found[k] = splitter.search(candidates[k], first(k), last(k), min_plane, threads);
+  for (std::size_t k = 0; k < candidates.size(); ++k) splitter.split(candidates[k], first(k), last(k), found[k]);
 }
 
 }  // namespace occseg
