@@ -318,6 +318,27 @@ TEST(Planes, OffSmallPlanesAndSmallBumpsDoNotSplit) {
   }
 }
 
+// A floor with free space on both sides (a shelf seen from above and below) has no side objects
+// stand on: the box on it stays with it.
+TEST(Planes, APlaneSeenFromBothSidesDoesNotSplit) {
+  Scene s(Dims{30, 30, 14}, [](int x, int y, int z) {
+    if (z == 5) return 2;
+    return in_box(x, y, z, 10, 12, 6, 13, 15, 10) ? 2 : 0;
+  });
+  s.label_and_split(256);
+  EXPECT_EQ(s.segments.size(), s.before);
+  EXPECT_EQ(s.at(10, 12, 6), s.at(0, 0, 5));
+  // The same floor seen from above only (unknown below) does let the box go.
+  Scene one_side(Dims{30, 30, 14}, [](int x, int y, int z) {
+    if (z == 5) return 2;
+    if (z < 5) return 1;
+    return in_box(x, y, z, 10, 12, 6, 13, 15, 10) ? 2 : 0;
+  });
+  one_side.label_and_split(256);
+  EXPECT_EQ(one_side.segments.size(), one_side.before + 1);
+  EXPECT_NE(one_side.at(10, 12, 6), one_side.at(0, 0, 5));
+}
+
 TEST(Planes, LegsUnderATableStayWithItsTopAndAMugOnItSplits) {
   // A top at z = 8 (x 2..27, y 2..21) on four 2 x 2 legs (z 0..7); a 3 x 3 x 4 mug on the top.
   // Sensors above: free above and around, the space under the top unknown.
