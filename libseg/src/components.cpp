@@ -8,12 +8,17 @@
 
 #include "occseg/error.hpp"
 #include "occseg/parallel.hpp"
+#include "occseg/texture.hpp"
+#include "cpu_features.hpp"
 #include "huge_pages.hpp"
 #include "segment_internal.hpp"
 #include "thread_scratch.hpp"
 
 #ifdef __SSE2__
 #include <emmintrin.h>
+#endif
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
 #endif
 
 namespace occseg {
@@ -197,6 +202,25 @@ inline double run_sum(const float* v, std::size_t n) {
   for (; k < n; ++k) l[k & 7] += v[k];
   return ((l[0] + l[1]) + (l[2] + l[3])) + ((l[4] + l[5]) + (l[6] + l[7]));
 }
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#pragma GCC diagnostic push
+#ifndef __clang__  // (a GCC warning inside its own AVX-512 intrinsics; Clang does not know it)
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+// run_sum() with the eight lanes in one AVX-512 register: one conversion and one addition per
+// eight voxels instead of twelve SSE2 instructions, the same additions in the same order.
+__attribute__((target("avx512f"))) double run_sum_avx512(const float* v, std::size_t n) {
+  __m512d acc = _mm512_setzero_pd();
+  std::size_t k = 0;
+  for (; k + 8 <= n; k += 8) acc = _mm512_add_pd(acc, _mm512_cvtps_pd(_mm256_loadu_ps(v + k)));
+  double l[8];
+  _mm512_storeu_pd(l, acc);
+  for (; k < n; ++k) l[k & 7] += v[k];
+  return ((l[0] + l[1]) + (l[2] + l[3])) + ((l[4] + l[5]) + (l[6] + l[7]));
+}
+#pragma GCC diagnostic pop
+#endif
 
 // Runs (maximal stretches of one state along x) in every `every`-th of `rows` consecutive rows of
 // nx states. (The differences are summed with SSE2's sum of absolute differences: baseline x86-64
@@ -479,6 +503,8 @@ void label_states(const std::uint8_t* s, const std::function<void()>& release, c
   // order, into one slot per segment present in the slab. Finished slabs are added to the table
   // in slab order as soon as all slabs before them are (whoever finishes one merges what is
   // ready), so only the few slabs waiting for an earlier one keep their slots.
+  // (following set_texture_kernel(), so that the tests run both sums)
+  [[maybe_unused]] const bool avx512 = cpu_has_avx512() && detail::texture_kernel() >= detail::TextureKernel::avx512;
   std::vector<detail::ThreadScratch<SlotStats>> slots(slabs);
   std::vector<std::uint8_t> finished(slabs, 0);
   std::size_t merged = 0;
@@ -511,7 +537,11 @@ void label_states(const std::uint8_t* s, const std::function<void()>& release, c
           const std::uint32_t l = lab[i0 + x];             // its local number
           SlotStats& t = out[slot[l]];
           std::fill(lab + i0 + x, lab + i0 + e, ids[l]);
+#if defined(__x86_64__) && defined(__GNUC__)
+          t.mop += avx512 ? run_sum_avx512(p + i0 + x, e - x) : run_sum(p + i0 + x, e - x);  // runs in scan order
+#else
           t.mop += run_sum(p + i0 + x, e - x);  // runs in scan order within the slab
+#endif
           const std::uint64_t len = e - x;
           t.voxels += len;
           t.sum[0] += (static_cast<std::uint64_t>(x) + e - 1) * len / 2;
