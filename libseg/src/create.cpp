@@ -206,8 +206,11 @@ void detail::pack_own_bits(const std::uint8_t* own, const Dims& d, int threads, 
   const std::size_t words = (d.nx + 63) / 64;
   parallel_for(d.ny * d.nz, threads, [&](std::size_t r0, std::size_t r1) {
     for (std::size_t r = r0; r < r1; ++r) {
-      pack_equal(own + r * d.nx, d.nx, static_cast<std::uint8_t>(State::unknown), reinterpret_cast<word_t*>(unknown) + r * words);
-      pack_equal(own + r * d.nx, d.nx, static_cast<std::uint8_t>(State::occupied), reinterpret_cast<word_t*>(occupied) + r * words);
+      const std::uint8_t* row = own + r * d.nx;
+      constexpr auto kUnknownOwn = static_cast<std::uint8_t>(State::unknown);
+      constexpr auto kOccupiedOwn = static_cast<std::uint8_t>(State::occupied);
+      pack_equal(row, d.nx, kUnknownOwn, reinterpret_cast<word_t*>(unknown) + r * words);
+      pack_equal(row, d.nx, kOccupiedOwn, reinterpret_cast<word_t*>(occupied) + r * words);
     }
   });
 }
@@ -426,10 +429,7 @@ bool create_by_rows(const Grid& grid, const std::vector<Block>& blocks, const Pa
     }
   });
   if (growth) growth->filled = true;
-  if (defer) {
-    cell_state.resize(cell_state.size() + 4);  // (the growth reads 4 cells at a time)
-    growth->cell_states = std::move(cell_state);
-  }
+  if (defer) growth->cell_states = std::move(cell_state);
   return true;
 }
 

@@ -174,7 +174,8 @@ __attribute__((target("avx2"))) inline __m256i rules_step_avx2(std::uint8_t* st,
   const __m256i gap = _mm256_blendv_epi8(s, unk, _mm256_and_si256(_mm256_cmpeq_epi8(s, fre), touches));
   const __m256i res = _mm256_blendv_epi8(known, _mm256_blendv_epi8(gap, unk, region), own_unknown);
   _mm256_storeu_si256(at, res);
-  return _mm256_andnot_si256(region, _mm256_and_si256(_mm256_and_si256(own_unknown, touches), _mm256_cmpeq_epi8(res, unk)));
+  const __m256i gap_touching = _mm256_andnot_si256(region, _mm256_and_si256(own_unknown, touches));
+  return _mm256_and_si256(gap_touching, _mm256_cmpeq_epi8(res, unk));
 }
 
 // rules_row() for rows of at least 32 voxels, 32 voxels per step in hand-written AVX2; the last

@@ -135,7 +135,7 @@ struct GrowthRows {
   bool filled = false;                    // set by the creation when it wrote them
   bool defer_states = false;              // asked by the caller
   // By the creation when it deferred the states: cell (cx, cy, cz) at cx + ncx * (cy + ncy * cz)
-  // (ncx, ncy: cells along x and y, kMeanCell voxels each), 4 bytes of padding after the last.
+  // (ncx, ncy: cells along x and y, kMeanCell voxels each).
   std::vector<std::uint8_t> cell_states;
 };
 // For tests: the block means as creation sums them when the blocks tile the map on the lattice of
@@ -143,8 +143,8 @@ struct GrowthRows {
 std::vector<double> block_means_by_rows(const Grid& grid, const std::vector<Block>& blocks, int threads);
 
 // The refinement steps and the default rules with the own states as bits (the public versions
-// take bytes and pack them). `scratch` (8-byte aligned, or nullptr) may hold the rules' three bit
-// masks of the opening if it has room.
+// take bytes and pack them). `scratch` (8-byte aligned, or nullptr) may hold the growth's masks
+// and then the rules' region mask if it has room.
 void refine_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& dims, const Params& params);
 void refine_boundaries(std::uint8_t* states, const OwnBits& own, const Dims& dims, const Params& params);
 // The unknown growth of refine_unknown() on bit masks (unknown_growth.cpp), kept in `scratch`

@@ -222,9 +222,11 @@ __attribute__((target("avx2,popcnt"))) std::size_t row_members_avx2(const std::u
 }
 #endif
 
-std::size_t row_members(const std::uint32_t* row, std::size_t x0, std::size_t x1, std::uint32_t s, std::uint64_t* bits) {
+std::size_t row_members(const std::uint32_t* row, std::size_t x0, std::size_t x1, std::uint32_t s,
+                        std::uint64_t* bits) {
 #if defined(__x86_64__) && defined(__GNUC__)
-  if (cpu_has_avx2() && g_vector_planes.load(std::memory_order_relaxed)) return row_members_avx2(row, x0, x1, s, bits);
+  if (cpu_has_avx2() && g_vector_planes.load(std::memory_order_relaxed))
+    return row_members_avx2(row, x0, x1, s, bits);
 #endif
   return row_members_portable(row, x0, x1, s, bits);
 }
@@ -543,8 +545,10 @@ class Splitter {
         const std::size_t row = g_.index(0, y, z);
         if (!row_members(labels_.data() + row, x0, x1, s, bits.data())) continue;
         for (std::size_t k = 0; k < bits.size(); ++k)
-          for (std::uint64_t w = bits[k]; w; w &= w - 1)
-            members.push_back(static_cast<std::uint32_t>(row + x0 + 64 * k + static_cast<std::size_t>(__builtin_ctzll(w))));
+          for (std::uint64_t w = bits[k]; w; w &= w - 1) {
+            const std::size_t x = x0 + 64 * k + static_cast<std::size_t>(__builtin_ctzll(w));
+            members.push_back(static_cast<std::uint32_t>(row + x));
+          }
       }
   }
 

@@ -188,7 +188,8 @@ void boundary_plane(std::uint8_t* st, const OwnBits& own, std::size_t orow0, std
   for (std::size_t k = 1; k < pl.rows; ++k) {
     std::uint8_t* cur = first + static_cast<std::ptrdiff_t>(k) * rs;
     const std::uint8_t* prev = cur - rs;
-    const auto ocur = static_cast<std::size_t>(static_cast<std::ptrdiff_t>(ofirst) + static_cast<std::ptrdiff_t>(k) * fs);
+    const auto ocur = static_cast<std::size_t>(static_cast<std::ptrdiff_t>(ofirst) +
+                                               static_cast<std::ptrdiff_t>(k) * fs);  // own states' row
     std::uint8_t* fk = ffirst + static_cast<std::ptrdiff_t>(k) * fs;
     if (!(fk[-fs] | fk[0])) {
       if (k < last_start + static_cast<std::size_t>(look))

@@ -8,8 +8,8 @@
 namespace occseg {
 
 // Storage a context keeps from one segment() to the next besides the label array (whose pages
-// are then in already): the labelling's run-start bits and the own states' unknown voxels as bits
-// (1/8 byte per voxel each).
+// are then in already): the labelling's run-start bits (1/8 byte per voxel), and the own states'
+// bits when they were made outside the label array (1/8 byte per voxel each).
 struct Workspace {
   std::vector<std::uint8_t> run_starts;
   // The own states (detail::OwnBits) when the label array cannot hold them (a plugin's texture,

@@ -173,7 +173,7 @@ void write_row(const std::uint8_t* cs, const word_t* w, std::size_t x0, std::siz
 }
 
 #ifdef OCCSEG_GROWTH_AVX2
-// write_row() 32 voxels (4 cells) per step; cs is read 4 cells at a time (padded by the creation).
+// write_row() 32 voxels (4 cells, read as one 4-byte word: all in the row) per step.
 __attribute__((target("avx2"))) void write_row_avx2(const std::uint8_t* cs, const word_t* w, std::size_t nx,
                                                     std::uint8_t* st) {
   // byte i of a 128-bit half takes cell i / 8 of the four (the low half cells 0, 1; the high 2, 3)
