@@ -193,7 +193,8 @@ std::size_t row_members_portable(const std::uint32_t* row, std::size_t x0, std::
   std::size_t count = 0;
   for (std::size_t k = 0; x0 + k < x1; k += 64) {
     std::uint64_t w = 0;
-    for (std::size_t j = 0; j < 64 && x0 + k + j < x1; ++j) w |= static_cast<std::uint64_t>(row[x0 + k + j] == s) << j;
+    for (std::size_t j = 0; j < 64 && x0 + k + j < x1; ++j)
+      w |= static_cast<std::uint64_t>(row[x0 + k + j] == s) << j;
     bits[k / 64] = w;
     count += static_cast<std::size_t>(__builtin_popcountll(w));
   }
@@ -231,7 +232,6 @@ std::size_t row_members(const std::uint32_t* row, std::size_t x0, std::size_t x1
   return row_members_portable(row, x0, x1, s, bits);
 }
 
-
 // cost() of the sample in `c` (the same points as `pts`).
 double sample_cost(const std::vector<Vec>& pts, const Coords& c, const Plane& pl, double stop) {
 #if defined(__x86_64__) && defined(__GNUC__)
@@ -245,7 +245,8 @@ double sample_cost(const std::vector<Vec>& pts, const Coords& c, const Plane& pl
 void sample_cost_pair(const std::vector<Vec>& pts, const Coords& c, const Plane& a, const Plane& b, double stop,
                       double& cost_a, double& cost_b) {
 #if defined(__x86_64__) && defined(__GNUC__)
-  if (cpu_has_avx2() && g_vector_planes.load(std::memory_order_relaxed)) return cost_pair_avx2(c, a, b, stop, cost_a, cost_b);
+  if (cpu_has_avx2() && g_vector_planes.load(std::memory_order_relaxed))
+    return cost_pair_avx2(c, a, b, stop, cost_a, cost_b);
 #endif
   cost_a = sample_cost(pts, c, a, stop);
   cost_b = sample_cost(pts, c, b, stop);
