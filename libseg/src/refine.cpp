@@ -43,8 +43,8 @@ void classify_own(const std::uint8_t* own, int n, std::uint8_t from, bool* reass
 // classify_own() on a window of n voxels entered from state `from` (free or occupied), voxel k at
 // pos(k) = (word index, bit) of the bit arrays: the occupied bits first, which alone decide most
 // windows (into an object whose voxels are all occupied, or out of one into free space with none:
-// no evidence for `from`, nothing moves), the unknown bits only for the others (boundary scans on
-// the noisy map 119-122 -> 106-110 ms, on the scene 6.3 -> 6.0-6.5 ms of refinement).
+// no evidence for `from`, nothing moves), the unknown bits only for the others (refinement on the
+// noisy map 119-122 -> 106-110 ms, on the scene 6.3 -> 6.0-6.5 ms).
 template <class Pos>
 void classify_window(const OwnBits& own, int n, std::uint8_t from, bool* reassign, Pos&& pos) {
   std::uint8_t occupied[kMaxLook];
