@@ -159,6 +159,16 @@ inline std::size_t next_start(const std::uint8_t* bits, std::size_t i, std::size
   return end;
 }
 
+// Set bits of `bits` in [b, e). With b a row's first voxel and e a run start: the run's index in
+// its row (the slab join looks the dense slabs' runs up by it; at most a row per call).
+inline std::size_t starts_between(const std::uint8_t* bits, std::size_t b, std::size_t e) {
+  std::size_t c = 0;
+  for (; b < e && b % 8; ++b) c += (bits[b / 8] >> (b % 8)) & 1u;
+  for (; b + 8 <= e; b += 8) c += static_cast<std::size_t>(__builtin_popcount(bits[b / 8]));
+  for (; b < e; ++b) c += (bits[b / 8] >> (b % 8)) & 1u;
+  return c;
+}
+
 // next_start() reading no byte past the one of voxel end - 1: while the slabs are being
 // labelled, the bytes after a slab's are the next slab's (slabs start on a byte).
 inline std::size_t next_start_in(const std::uint8_t* bits, std::size_t i, std::size_t end) {
@@ -281,6 +291,12 @@ void label_states(const std::uint8_t* s, const std::function<void()>& release, c
   //   byte per voxel of a slab, of the one or two slabs each thread has at a time.
   std::vector<std::uint32_t> local_count(slabs, 0);
   std::vector<std::vector<std::uint8_t>> local_state(slabs);  // state of each local component
+  // The dense slabs' runs, kept for the join and the statistics: the first run of each row
+  // (row_first) and each run's local number in scan order (run_local); empty for sparse slabs,
+  // whose numbers are at their run starts in the label array. The dense slabs write no label
+  // before the statistics: their numbers at the run starts cost a read and a write of a line of
+  // the label array every two runs or so.
+  std::vector<std::vector<std::uint32_t>> row_first(slabs), run_local(slabs);
   const auto sparse = [&](std::size_t sl) __attribute__((noinline)) {
     const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab);
     for (std::size_t z = zb; z < ze; ++z)
@@ -389,8 +405,8 @@ void label_states(const std::uint8_t* s, const std::function<void()>& release, c
     }
     first[rows] = static_cast<std::uint32_t>(rx.size());
     // Local numbering in place: a run's parent is an earlier run of the slab, already renumbered
-    // (the entries are overwritten in index order). Each run start gets its number in the label
-    // array (the join and the statistics read it there) and its bit.
+    // (the entries are overwritten in index order). Each run start gets its bit; the numbers stay
+    // in the table.
     std::uint32_t m = 0;
     for (std::size_t r = 0; r < rows; ++r) {
       const std::size_t i0 = nx * (r % ny + ny * (zb + r / ny));
@@ -399,10 +415,11 @@ void label_states(const std::uint8_t* s, const std::function<void()>& release, c
         starts[rs / 8] = static_cast<std::uint8_t>(starts[rs / 8] | (1u << (rs % 8)));
         if (par[k] == k) local_state[sl].push_back(rv[k]);
         par[k] = par[k] == k ? m++ : par[par[k]];
-        lab[rs] = par[k];
       }
     }
     local_count[sl] = m;
+    row_first[sl] = std::move(first);
+    run_local[sl].assign(par.begin(), par.end());  // (par holds room for the most runs the path takes)
   };
   for_each_slab(slabs, threads, [&](std::size_t sl) {
     const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab);
@@ -419,6 +436,15 @@ void label_states(const std::uint8_t* s, const std::function<void()>& release, c
   for (std::size_t sl = 0; sl < slabs; ++sl) base[sl + 1] = base[sl] + local_count[sl];
   std::vector<std::uint32_t> parent(base[slabs]);
   for (std::uint32_t k = 0; k < base[slabs]; ++k) parent[k] = k;
+  // Local number of the run starting at voxel x of row r of slab sl (map index of the row: i0),
+  // the k-th run of its row (k: counted by the caller, or -1 for counting its run starts).
+  const auto local_at = [&](std::size_t sl, std::size_t r, std::size_t i0, std::size_t x,
+                            std::size_t k = std::size_t(-1)) -> std::uint32_t {
+    if (run_local[sl].empty()) return lab[i0 + x];
+    if (k == std::size_t(-1)) k = starts_between(starts.data(), i0, i0 + x);
+    return run_local[sl][row_first[sl][r] + k];
+  };
+  const std::size_t last_plane = (kLabelSlab - 1) * ny;  // first row of a full slab's last plane
   // The slabs' first planes at once, on the threads (serially, 1.1 of the scene's 12.5 ms).
   for_each_slab(slabs - 1, threads, [&](std::size_t boundary) {
     const std::size_t sl = boundary + 1, z = sl * kLabelSlab;
@@ -426,26 +452,30 @@ void label_states(const std::uint8_t* s, const std::function<void()>& release, c
       const std::size_t i0 = nx * (y + ny * z), j0 = i0 - sz;  // this row, the row below
       const std::uint8_t *a = s + i0, *b = s + j0;
       // Runs [xa, ea) of this row and [xb, eb) of the row below, stepped along together.
-      std::size_t xa = 0, xb = 0, ea = run_end(a, 0, nx), eb = run_end(b, 0, nx);
+      // (ka, kb: their indices in their rows.)
+      std::size_t xa = 0, xb = 0, ea = run_end(a, 0, nx), eb = run_end(b, 0, nx), ka = 0, kb = 0;
       while (true) {
-        if (a[xa] == b[xb]) unite_shared(parent.data(), base[sl] + lab[i0 + xa], base[sl - 1] + lab[j0 + xb]);
+        if (a[xa] == b[xb])
+          unite_shared(parent.data(), base[sl] + local_at(sl, y, i0, xa, ka),
+                       base[sl - 1] + local_at(sl - 1, last_plane + y, j0, xb, kb));
         const std::size_t e = std::min(ea, eb);
         if (e == nx) break;
-        if (ea == e) xa = ea, ea = run_end(a, xa, nx);
-        if (eb == e) xb = eb, eb = run_end(b, xb, nx);
+        if (ea == e) xa = ea, ea = run_end(a, xa, nx), ++ka;
+        if (eb == e) xb = eb, eb = run_end(b, xb, nx), ++kb;
       }
       if (!occupied26) continue;
       // Occupied runs of this row also meet occupied voxels of rows y-1..y+1 below across edges
       // and corners: one voxel wider on both sides.
-      for (std::size_t x = 0; x < nx;) {
+      for (std::size_t x = 0, ka = 0; x < nx; ++ka) {
         const std::size_t e = run_end(a, x, nx);
         if (a[x] == kOccupiedState) {
-          const std::uint32_t ga = base[sl] + lab[i0 + x];
+          const std::uint32_t ga = base[sl] + local_at(sl, y, i0, x, ka);
           const std::size_t lo = x > 0 ? x - 1 : 0, hi = std::min(nx, e + 1);
           for (std::size_t yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < ny; ++yy) {
             const std::size_t k0 = nx * (yy + ny * (z - 1));
-            for_each_run_in(s + k0, kOccupiedState, lo, hi,
-                            [&](std::size_t j) { unite_shared(parent.data(), ga, base[sl - 1] + lab[k0 + j]); });
+            for_each_run_in(s + k0, kOccupiedState, lo, hi, [&](std::size_t j) {
+              unite_shared(parent.data(), ga, base[sl - 1] + local_at(sl - 1, last_plane + yy, k0, j));
+            });
           }
         }
         x = e;
@@ -529,12 +559,14 @@ void label_states(const std::uint8_t* s, const std::function<void()>& release, c
     std::vector<std::uint32_t> slot(local);
     for (std::size_t k = 0; k < local; ++k)
       slot[k] = static_cast<std::uint32_t>(std::lower_bound(uniq.begin(), uniq.end(), ids[k]) - uniq.begin());
+    // A dense slab's local numbers, run after run in scan order; a sparse slab's are in the labels.
+    const std::uint32_t* numbers = run_local[sl].empty() ? nullptr : run_local[sl].data();
     for (std::size_t z = zb; z < ze; ++z)
       for (std::size_t y = 0; y < ny; ++y) {
         const std::size_t i0 = nx * (y + ny * z);
         for (std::size_t x = 0; x < nx;) {
           const std::size_t e = next_start(starts.data(), i0 + x + 1, i0 + nx) - i0;  // a run: one component
-          const std::uint32_t l = lab[i0 + x];             // its local number
+          const std::uint32_t l = numbers ? *numbers++ : lab[i0 + x];  // its local number
           SlotStats& t = out[slot[l]];
           std::fill(lab + i0 + x, lab + i0 + e, ids[l]);
 #if defined(__x86_64__) && defined(__GNUC__)
@@ -556,6 +588,8 @@ void label_states(const std::uint8_t* s, const std::function<void()>& release, c
           x = e;
         }
       }
+    run_local[sl] = std::vector<std::uint32_t>();
+    row_first[sl] = std::vector<std::uint32_t>();
     std::lock_guard<std::mutex> lock(merge_mutex);
     finished[sl] = 1;
     for (; merged < slabs && finished[merged]; ++merged) {

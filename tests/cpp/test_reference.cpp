@@ -398,15 +398,16 @@ TEST(Reference, VoxelRulesMatchOnRandomStates) {
 }
 
 // The labelling on random states against the reference union-find: maps of many 8-plane slabs
-// (their first planes are joined on several threads at once), runs of 1 to 40 voxels of one
-// state (slabs labelled with a table of their runs) and of 1 to 6 (slabs labelled through the
-// label array), 6- and 26-connectivity, 1 to 4 threads. Labels and the whole segment table must
-// match.
+// (their first planes are joined on several threads at once), runs of 1 to 120 voxels of one
+// state (slabs labelled with a table of their runs, which keeps their local numbers until the
+// statistics), of 1 to 40 (tables and the label array, slab by slab) and of 1 to 6 (slabs labelled
+// through the label array), 6- and 26-connectivity, 1 to 4 threads. Labels and the whole segment
+// table must match.
 TEST(Reference, LabellingMatchesOnRandomStatesAcrossManySlabs) {
   const Dims dims[] = {{41, 29, 70}, {70, 3, 129}, {5, 60, 41}, {130, 17, 33}};
   std::uint64_t seed = 7;
   for (const Dims& d : dims)
-    for (double longest : {40.0, 6.0}) {
+    for (double longest : {120.0, 40.0, 6.0}) {
       test::Rng r(seed++);
       Grid g(d, 0.5f);
       std::vector<std::uint8_t> st(d.count());
