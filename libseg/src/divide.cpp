@@ -466,8 +466,11 @@ struct Divider {
       if (!c.complete) finish(c);
       return c;
     };
-    for (std::size_t a = 0; a < n; ++a)
-      for (std::size_t b = a + 1; b < n; ++b) {
+    // Pairs in the order (0,1), (0,2), (1,2), (0,3), ...: every pair of the first children before
+    // the next child, so that a block that splits after p pairs needed about sqrt(2p) + 1 children
+    // finished instead of p + 1. Gmax and Gmin over all pairs do not depend on the order.
+    for (std::size_t b = 1; b < n; ++b)
+      for (std::size_t a = 0; a < b; ++a) {
         const double v = sim ? compare_histograms(*sim, used[a]->h, used[b]->h, bins) : g(ready(*used[a]), ready(*used[b]));
         gmax = std::max(gmax, v);
         gmin = std::min(gmin, v);
