@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "occseg/departures.hpp"
+#include "occseg/histogram.hpp"
 #include "occseg/refine.hpp"
 #include "occseg/segment.hpp"
 #include "occseg/texture.hpp"
@@ -193,6 +194,72 @@ TEST(Reference, DivisionMatchesWithEveryCountingKernel) {
   // 0.5), and maps without it.
   EXPECT_GE(with_flat, 3u);
   EXPECT_GE(without_flat, 1u);
+}
+
+// The division's G-statistics (and the public g_statistic()) bit for bit, and every pair of siblings taken: one 16^3 block of
+// eight 8^3 octants with random histograms over 40 codes spread over the 512 bins (each sum fills
+// its eight lanes several times), X set to the reference's Gmax / Gmin over the 28 pairs and to
+// the next double below it. The block must stay whole at X and split below it, on every counting
+// kernel: a G one rounding off, or a pair left out (each of the 28 pairs is the largest or the
+// smallest in some of the blocks), moves the ratio across one of the two.
+TEST(Reference, DivisionRatioIsExactAtTheThreshold) {
+  const Dims d{16, 16, 16};
+  const Grid g(d, 0.5f);
+  std::vector<std::uint16_t> codes(d.count());
+  std::vector<std::vector<bool>> extreme(8, std::vector<bool>(8, false));
+  Params p = Params::defaults();
+  p.smax = 16;
+  p.smin = 8;
+  for (int trial = 0; trial < 56; ++trial) {
+    test::Rng r(500 + static_cast<std::uint64_t>(trial));
+    std::vector<std::vector<std::uint32_t>> h(8, std::vector<std::uint32_t>(512, 0));
+    // Octants `close` and `twin` (pair number trial % 28) draw from nearly the same weights: their
+    // pair is most likely the smallest.
+    int twin = 1, close = trial % 28;
+    while (close >= twin) close -= twin++;
+    double w[8][40];
+    for (int k = 0; k < 8; ++k)
+      for (double& x : w[k]) x = r.uniform() * r.uniform();
+    for (int c = 0; c < 40; ++c) w[twin][c] = w[close][c] * (0.9 + 0.2 * r.uniform());
+    for (int k = 0; k < 8; ++k) {
+      double sum = 0;
+      for (double x : w[k]) sum += x;
+      for (std::size_t z = 0; z < 8; ++z)
+        for (std::size_t y = 0; y < 8; ++y)
+          for (std::size_t x = 0; x < 8; ++x) {
+            double u = r.uniform() * sum;
+            int c = 0;
+            while (c < 39 && (u -= w[k][c]) > 0) ++c;
+            const auto code = static_cast<std::uint16_t>(c * 13 % 512);  // 40 bins spread over 0..507
+            const std::size_t i = g.index(x + 8 * (k & 1), y + 8 * (k >> 1 & 1), z + 8 * (k >> 2));
+            codes[i] = code;
+            ++h[static_cast<std::size_t>(k)][code];
+          }
+    }
+    double gmax = 0, gmin = HUGE_VAL;
+    int max_pair[2] = {0, 0}, min_pair[2] = {0, 0};
+    for (int b = 1; b < 8; ++b)
+      for (int a = 0; a < b; ++a) {
+        const double v = reference::g_statistic(h[a].data(), h[b].data(), 512);
+        EXPECT_EQ(g_statistic(h[a].data(), h[b].data(), 512), v) << "the public G-statistic, trial " << trial;
+        if (v > gmax) gmax = v, max_pair[0] = a, max_pair[1] = b;
+        if (v < gmin) gmin = v, min_pair[0] = a, min_pair[1] = b;
+      }
+    ASSERT_GT(gmin, 0.0);
+    extreme[max_pair[0]][max_pair[1]] = extreme[min_pair[0]][min_pair[1]] = true;
+    const double ratio = gmax / gmin;
+    for (int kernel = 0; kernel <= static_cast<int>(detail::TextureKernel::fastest); ++kernel) {
+      detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
+      for (const double x : {ratio, std::nextafter(ratio, 0.0)}) {
+        p.split_ratio = x;
+        const auto got = detail::divide_codes(g, codes.data(), 512, p, /*faces_only=*/false);
+        EXPECT_EQ(got.size(), x == ratio ? 1u : 8u) << "trial " << trial << " kernel " << kernel << " X " << x;
+      }
+    }
+    detail::set_texture_kernel(detail::TextureKernel::fastest);
+  }
+  for (int b = 1; b < 8; ++b)
+    for (int a = 0; a < b; ++a) EXPECT_TRUE(extreme[a][b]) << "pair " << a << ", " << b << " never decided the ratio";
 }
 
 // A plugin's codes may leave any voxel without texture (kNoTexture), inside the map too: there
