@@ -183,17 +183,21 @@ __attribute__((target("avx2,popcnt"))) void count_rows_packed(const detail::code
 }
 
 // count_rows_packed() for two rows at a time with AVX-512 VBMI2: 16 voxels (8 of each row) in
-// one 256-bit vector, the codes other than `common` packed by one compress instruction.
+// one 256-bit vector, the codes other than `common` packed by one compress instruction. Voxels of
+// a `second` code (Second) are counted by a compare too: the built-in operator's local maxima
+// (code 0) were a quarter of the listed codes on the scene (division -0.3 ms on 2 threads).
 #pragma GCC diagnostic push
 #ifndef __clang__  // (a GCC warning; Clang does not know it)
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC 12 inside its own AVX-512 intrinsics
 #endif
-template <bool Check>
+template <bool Check, bool Second>
 __attribute__((target("avx512f,avx512bw,avx512vl,avx512vbmi2,popcnt"))) void count_rows_compress(
     const detail::code_t* codes, const Dims& dims, const Block& b, std::size_t bins, std::uint32_t* h,
-    detail::code_t common) {
+    detail::code_t common, detail::code_t second) {
   std::fill(h, h + bins, 0u);
   std::uint16_t* const list = code_list(b.volume() + 32);
+  std::uint64_t same2 = 0;
+  const __m512i second_code4 = _mm512_set1_epi16(static_cast<short>(second));
   const __m256i same_code = _mm256_set1_epi16(static_cast<short>(common));
   const __m256i none = _mm256_set1_epi16(static_cast<short>(kNoTexture));
   std::size_t len = 0;
@@ -213,9 +217,11 @@ __attribute__((target("avx512f,avx512bw,avx512vl,avx512vbmi2,popcnt"))) void cou
         v = _mm512_inserti32x4(v, _mm_loadu_si128(reinterpret_cast<const __m128i*>(r0 + 2 * nx)), 2);
         v = _mm512_inserti32x4(v, _mm_loadu_si128(reinterpret_cast<const __m128i*>(r0 + 3 * nx)), 3);
         const __mmask32 eq = _mm512_cmpeq_epi16_mask(v, same_code4);
-        const __mmask32 keep = Check ? static_cast<__mmask32>(~eq & _mm512_cmpneq_epi16_mask(v, none4))
-                                     : static_cast<__mmask32>(~eq);
+        const __mmask32 eq2 = Second ? _mm512_mask_cmpeq_epi16_mask(static_cast<__mmask32>(~eq), v, second_code4) : 0;
+        const auto other = static_cast<__mmask32>(~(eq | eq2));
+        const __mmask32 keep = Check ? static_cast<__mmask32>(other & _mm512_cmpneq_epi16_mask(v, none4)) : other;
         same += static_cast<unsigned>(__builtin_popcount(eq));
+        if (Second) same2 += static_cast<unsigned>(__builtin_popcount(eq2));
         _mm512_storeu_si512(list + len, _mm512_maskz_compress_epi16(keep, v));
         len += static_cast<unsigned>(__builtin_popcount(keep));
       }
@@ -239,6 +245,7 @@ __attribute__((target("avx512f,avx512bw,avx512vl,avx512vbmi2,popcnt"))) void cou
     for (; y < b.hi[1]; ++y) count_tail<Check>(codes + nx * (y + ny * z), b.lo[0], b.hi[0], h);  // an odd row count
   }
   add_listed<Check>(h, list, len, common, same);
+  if (Second) h[second] += static_cast<std::uint32_t>(same2);
 }
 #pragma GCC diagnostic pop
 
@@ -263,11 +270,15 @@ void count_with(Counting kernel, const detail::code_t* codes, const Dims& dims, 
                 std::uint32_t* h, detail::code_t common) {
 #ifdef OCCSEG_DIVIDE_PACKED
   if (kernel != Counting::rows) {
-    if (common == kNoTexture) common = codes[b.lo[0] + dims.nx * (b.lo[1] + dims.ny * std::size_t(b.lo[2]))];
-    if (kernel == Counting::compress)
-      count_rows_compress<Check>(codes, dims, b, bins, h, common);
-    else
-      count_rows_packed<Check>(codes, dims, b, bins, h, common);
+    const std::size_t first = b.lo[0] + dims.nx * (b.lo[1] + dims.ny * std::size_t(b.lo[2]));
+    if (kernel == Counting::compress) {
+      if (common == kNoTexture)  // (not the built-in operator's codes)
+        count_rows_compress<Check, false>(codes, dims, b, bins, h, codes[first], 0);
+      else  // the built-in operator's local maxima (LBP 0, level 0) second
+        count_rows_compress<Check, true>(codes, dims, b, bins, h, common, 0);
+      return;
+    }
+    count_rows_packed<Check>(codes, dims, b, bins, h, common == kNoTexture ? codes[first] : common);
     return;
   }
 #endif
