@@ -655,7 +655,27 @@ struct Divider {
       return std::tie(p.lo[2], p.lo[1], p.lo[0]) < std::tie(q.lo[2], q.lo[1], q.lo[0]);
     });
     t.total.assign(nn, 0);
-    for (std::uint32_t i : t.order) t.total[i] = count(t.nodes[i].b, t.hist.data() + i * stride);
+    // While counting a block, one of the eight planes of the block eight places on (the next row
+    // of blocks across the top block, when it is eight blocks wide) is prefetched, across the top
+    // block's width: over eight blocks, the next row of blocks arrives whole. The hardware
+    // prefetchers did not follow the jumps from row to row and plane to plane (counting 8.5 ->
+    // 7.1 ms on the scene, one thread); all of a row of blocks at once overran the line fill
+    // buffers and gained nothing.
+    const std::size_t nx = grid.dims.nx, ny = grid.dims.ny, row_bytes = (top.hi[0] - top.lo[0]) * sizeof(detail::code_t);
+    for (std::size_t j = 0; j < t.order.size(); ++j) {
+      if (j + 8 < t.order.size()) {
+        const Block& ahead = t.nodes[t.order[j + 8]].b;
+        const std::size_t z = ahead.lo[2] + j % 8;
+        if (z < ahead.hi[2])
+          for (std::size_t y = ahead.lo[1]; y < ahead.hi[1]; ++y) {
+            const char* r = reinterpret_cast<const char*>(codes + nx * (y + ny * z) + top.lo[0]);
+            for (std::size_t q = 0; q < row_bytes; q += 64) __builtin_prefetch(r + q);
+            __builtin_prefetch(r + row_bytes - 1);
+          }
+      }
+      const std::uint32_t i = t.order[j];
+      t.total[i] = count(t.nodes[i].b, t.hist.data() + i * stride);
+    }
     for (std::size_t i = nn; i-- > 1;) {  // octants after their parent: bottom up
       const Tree::Node& nd = t.nodes[i];
       if (nd.nk == 0) continue;
