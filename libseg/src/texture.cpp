@@ -758,6 +758,13 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
     for (std::size_t z = z0; z < z1; ++z)
       for (std::size_t y = 0; y < ny; ++y) {
         if (lbp_scratch) {  // the LBP codes are there: no map reads
+          // The parked steps and LBP codes four rows on: the hardware prefetchers stop at each
+          // 4 KB page (texture 25.4 -> 24.4 ms on the scene, one thread).
+          if (y + 4 < ny) {
+            const std::size_t ahead = nx * (y + 4 + ny * z);
+            prefetch_row(codes + ahead, nx * sizeof(detail::code_t));
+            prefetch_row(lbp_scratch + ahead, nx);
+          }
           std::size_t x0 = 0, x1 = 0;
           if (!interior_row(d, y, z, x0, x1)) continue;
           const std::size_t at = nx * (y + ny * z) + x0;
