@@ -412,7 +412,8 @@ inline double lane_sum(const XLogX& xl, const std::uint32_t* v, std::size_t n) {
 
 // The non-zero values of a[i] (Two: of a[i] + b[i]) for i < n, in order, into out (room for n + 16
 // values); n is a multiple of 64 (histograms are padded to whole mask words with zeros). Returns
-// how many. The scalar path lists them along the children's bin masks instead.
+// how many. AVX-512: a compress per 16 bins; AVX2: a permute through a table per 8. The scalar
+// path lists them along the children's bin masks instead.
 #ifdef OCCSEG_DIVIDE_PACKED
 template <bool Two>
 __attribute__((target("avx512f,popcnt"))) std::size_t nonzero_values_avx512(const std::uint32_t* a,
@@ -429,21 +430,33 @@ __attribute__((target("avx512f,popcnt"))) std::size_t nonzero_values_avx512(cons
   return m;
 }
 
-// Mask bit j doubled (bits 2j and 2j + 1): a 32-bit lane is two 16-bit lanes of kLanePack.
-constexpr std::uint8_t kWide[16] = {0x00, 0x03, 0x0C, 0x0F, 0x30, 0x33, 0x3C, 0x3F,
-                                    0xC0, 0xC3, 0xCC, 0xCF, 0xF0, 0xF3, 0xFC, 0xFF};
+// Lane indices that pack the 32-bit lanes picked by an 8-bit mask to the front, in order (for
+// AVX2's vpermd; the lanes after them repeat lane 0, whatever they hold is overwritten or unused).
+struct PackTable8 {
+  alignas(8) std::uint8_t idx[256][8];
+  PackTable8() {
+    for (int m = 0; m < 256; ++m) {
+      int p = 0;
+      for (int j = 0; j < 8; ++j)
+        if (m & (1 << j)) idx[m][p++] = static_cast<std::uint8_t>(j);
+      for (; p < 8; ++p) idx[m][p] = 0;
+    }
+  }
+};
+const PackTable8 kPack8;
 
 template <bool Two>
 __attribute__((target("avx2,popcnt"))) std::size_t nonzero_values_avx2(const std::uint32_t* a, const std::uint32_t* b,
                                                                        std::size_t n, std::uint32_t* out) {
   std::size_t m = 0;
-  const __m128i zero = _mm_setzero_si128();
-  for (std::size_t i = 0; i < n; i += 4) {
-    __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(a + i));
-    if (Two) v = _mm_add_epi32(v, _mm_loadu_si128(reinterpret_cast<const __m128i*>(b + i)));
-    const unsigned k = ~static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(v, zero)))) & 15u;
-    const __m128i ctl = _mm_load_si128(reinterpret_cast<const __m128i*>(detail::kLanePack.shuffle[kWide[k]]));
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + m), _mm_shuffle_epi8(v, ctl));
+  const __m256i zero = _mm256_setzero_si256();
+  for (std::size_t i = 0; i < n; i += 8) {
+    __m256i v = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(a + i));
+    if (Two) v = _mm256_add_epi32(v, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(b + i)));
+    const unsigned k =
+        ~static_cast<unsigned>(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(v, zero)))) & 0xFFu;
+    const __m256i idx = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(kPack8.idx[k])));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + m), _mm256_permutevar8x32_epi32(v, idx));
     m += static_cast<unsigned>(__builtin_popcount(k));
   }
   return m;
