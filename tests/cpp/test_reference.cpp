@@ -196,12 +196,13 @@ TEST(Reference, DivisionMatchesWithEveryCountingKernel) {
   EXPECT_GE(without_flat, 1u);
 }
 
-// The division's G-statistics (and the public g_statistic()) bit for bit, and every pair of siblings taken: one 16^3 block of
-// eight 8^3 octants with random histograms over 40 codes spread over the 512 bins (each sum fills
-// its eight lanes several times), X set to the reference's Gmax / Gmin over the 28 pairs and to
-// the next double below it. The block must stay whole at X and split below it, on every counting
-// kernel: a G one rounding off, or a pair left out (each of the 28 pairs is the largest or the
-// smallest in some of the blocks), moves the ratio across one of the two.
+// The division's G-statistics (and the public g_statistic()) bit for bit, and every pair of
+// siblings taken: one 16^3 block of eight 8^3 octants with random histograms over 40 codes spread
+// over the 512 bins (each sum fills its eight lanes several times), X set to the reference's
+// Gmax / Gmin over the 28 pairs and to the next double below it. The block must stay whole at X
+// and split below it, on every counting kernel: a G one rounding off, or a pair left out (each of
+// the 28 pairs is the largest or the smallest in some of the blocks), moves the ratio across one
+// of the two.
 TEST(Reference, DivisionRatioIsExactAtTheThreshold) {
   const Dims d{16, 16, 16};
   const Grid g(d, 0.5f);
