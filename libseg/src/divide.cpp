@@ -415,8 +415,9 @@ inline double lane_sum(const XLogX& xl, const std::uint32_t* v, std::size_t n) {
 
 // The non-zero values of a[i] (Two: of a[i] + b[i]) for i < n, in order, into out (room for n + 16
 // values); n is a multiple of 64 (histograms are padded to whole mask words with zeros). Returns
-// how many. AVX-512: a compress per 16 bins; AVX2: a permute through a table per 8. The scalar
-// path lists them along the children's bin masks instead.
+// how many. AVX-512: a compress per 16 bins; AVX2: a permute per 8, its lane indices from the
+// packing table (lane_pack_internal.hpp). The scalar path lists them along the children's bin
+// masks instead.
 #ifdef OCCSEG_DIVIDE_PACKED
 template <bool Two>
 __attribute__((target("avx512f,popcnt"))) std::size_t nonzero_values_avx512(const std::uint32_t* a,
@@ -433,21 +434,6 @@ __attribute__((target("avx512f,popcnt"))) std::size_t nonzero_values_avx512(cons
   return m;
 }
 
-// Lane indices that pack the 32-bit lanes picked by an 8-bit mask to the front, in order (for
-// AVX2's vpermd; the lanes after them repeat lane 0, whatever they hold is overwritten or unused).
-struct PackTable8 {
-  alignas(8) std::uint8_t idx[256][8];
-  PackTable8() {
-    for (int m = 0; m < 256; ++m) {
-      int p = 0;
-      for (int j = 0; j < 8; ++j)
-        if (m & (1 << j)) idx[m][p++] = static_cast<std::uint8_t>(j);
-      for (; p < 8; ++p) idx[m][p] = 0;
-    }
-  }
-};
-const PackTable8 kPack8;
-
 template <bool Two>
 __attribute__((target("avx2,popcnt"))) std::size_t nonzero_values_avx2(const std::uint32_t* a, const std::uint32_t* b,
                                                                        std::size_t n, std::uint32_t* out) {
@@ -458,7 +444,10 @@ __attribute__((target("avx2,popcnt"))) std::size_t nonzero_values_avx2(const std
     if (Two) v = _mm256_add_epi32(v, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(b + i)));
     const unsigned k =
         ~static_cast<unsigned>(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(v, zero)))) & 0xFFu;
-    const __m256i idx = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(kPack8.idx[k])));
+    // vpermd's lane indices from the 16-bit packing table: entry (2j, 2j + 1) shifted right by one
+    // holds j in its low three bits, the only ones vpermd reads (unused entries 0x8080: lane 0).
+    const __m128i pairs = _mm_load_si128(reinterpret_cast<const __m128i*>(detail::kLanePack.shuffle[k]));
+    const __m256i idx = _mm256_cvtepu16_epi32(_mm_srli_epi16(pairs, 1));
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + m), _mm256_permutevar8x32_epi32(v, idx));
     m += static_cast<unsigned>(__builtin_popcount(k));
   }

@@ -1,7 +1,9 @@
 // A table of byte shuffles (internal) that packs the 16-bit lanes picked by an 8-bit mask to the
 // front of a vector, in order: SSSE3's pshufb, for processors without AVX-512 VBMI2's compress.
 // Used by the texture (the fine steps of textured voxels) and the division (the codes other than
-// a block's common one), both to count only what is left after one vector test.
+// a block's common one), both to count only what is left after one vector test; the division's
+// AVX2 listing of non-zero counts takes 32-bit lane indices for vpermd from it too (the entry
+// for lane j holds 2j, 2j + 1).
 #pragma once
 #include <cstdint>
 
