@@ -8,13 +8,13 @@
 #include <memory>
 
 #include "occseg/context.hpp"
-#include "occseg/create.hpp"
-#include "occseg/departures.hpp"
+#include "stages/create.hpp"
+#include "rules/departures.hpp"
 #include "occseg/parallel.hpp"
-#include "occseg/refine.hpp"
-#include "occseg/planes.hpp"
+#include "stages/refine.hpp"
+#include "rules/planes.hpp"
 #include "occseg/segment.hpp"
-#include "occseg/texture.hpp"
+#include "stages/texture.hpp"
 #include "scenes.hpp"
 
 using namespace occseg;

@@ -17,7 +17,7 @@
 #include "occseg/context.hpp"
 #include "occseg/npy.hpp"
 #include "occseg/segment.hpp"
-#include "occseg/texture.hpp"
+#include "stages/texture.hpp"
 #include "scenes.hpp"
 
 using namespace occseg;

@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "occseg/components.hpp"
+#include "stages/label.hpp"
 #include "occseg/error.hpp"
-#include "segment_internal.hpp"
+#include "pipeline/segment_internal.hpp"
 
 using namespace occseg;
 

@@ -4,11 +4,11 @@
 
 #include <cmath>
 
-#include "occseg/create.hpp"
-#include "occseg/refine.hpp"
-#include "occseg/texture.hpp"
-#include "codes_internal.hpp"
-#include "own_states_internal.hpp"
+#include "stages/create.hpp"
+#include "stages/refine.hpp"
+#include "stages/texture.hpp"
+#include "stages/codes.hpp"
+#include "stages/own_states.hpp"
 #include "random_maps.hpp"
 
 using namespace occseg;

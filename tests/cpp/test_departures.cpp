@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "occseg/departures.hpp"
+#include "rules/departures.hpp"
 
 using namespace occseg;
 

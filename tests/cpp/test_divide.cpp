@@ -2,8 +2,8 @@
 
 #include <algorithm>
 
-#include "occseg/divide.hpp"
-#include "occseg/histogram.hpp"
+#include "stages/divide.hpp"
+#include "stages/histogram.hpp"
 
 using namespace occseg;
 

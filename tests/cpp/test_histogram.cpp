@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "occseg/histogram.hpp"
+#include "stages/histogram.hpp"
 
 using namespace occseg;
 

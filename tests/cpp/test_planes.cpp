@@ -8,7 +8,7 @@
 #include <functional>
 #include <set>
 
-#include "occseg/planes.hpp"
+#include "rules/planes.hpp"
 #include "occseg/segment.hpp"
 
 using namespace occseg;

@@ -7,13 +7,13 @@
 #include <cmath>
 #include <cstring>
 
-#include "occseg/departures.hpp"
-#include "occseg/histogram.hpp"
-#include "occseg/refine.hpp"
+#include "rules/departures.hpp"
+#include "stages/histogram.hpp"
+#include "stages/refine.hpp"
 #include "occseg/segment.hpp"
-#include "occseg/texture.hpp"
-#include "codes_internal.hpp"
-#include "own_states_internal.hpp"
+#include "stages/texture.hpp"
+#include "stages/codes.hpp"
+#include "stages/own_states.hpp"
 #include "random_maps.hpp"
 #include "reference/reference.hpp"
 

@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "occseg/refine.hpp"
+#include "stages/refine.hpp"
 
 using namespace occseg;
 

@@ -5,7 +5,7 @@
 #include <string>
 
 #include "occseg/error.hpp"
-#include "occseg/texture.hpp"
+#include "stages/texture.hpp"
 
 using namespace occseg;
 

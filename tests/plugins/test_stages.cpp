@@ -12,11 +12,11 @@
 #include <thread>
 
 #include "occseg/error.hpp"
-#include "occseg/histogram.hpp"
+#include "stages/histogram.hpp"
 #include "occseg/registry.hpp"
 #include "occseg/segment.hpp"
-#include "occseg/texture.hpp"
-#include "occseg/texture2d.hpp"
+#include "stages/texture.hpp"
+#include "stages/texture2d.hpp"
 
 using namespace occseg;
 

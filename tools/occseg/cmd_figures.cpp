@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "occseg/components.hpp"
+#include "stages/label.hpp"
 #include "occseg/error.hpp"
 #include "occseg/file_write.hpp"
 #include "occseg/sim/scanner.hpp"

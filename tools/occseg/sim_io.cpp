@@ -12,6 +12,7 @@
 #include "occseg/file_write.hpp"
 #include "occseg/npy.hpp"
 #include "occseg/sim/baseline.hpp"
+#include "stages/label.hpp"
 
 namespace occseg::cli {
 

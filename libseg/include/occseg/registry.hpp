@@ -15,7 +15,7 @@
 #include "occseg/grid.hpp"
 #include "occseg/occseg_plugin.h"
 #include "occseg/params.hpp"
-#include "occseg/texture.hpp"
+#include "occseg/texture_codes.hpp"
 
 namespace occseg {
 

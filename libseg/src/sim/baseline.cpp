@@ -2,7 +2,7 @@
 
 #include <chrono>
 
-#include "occseg/components.hpp"
+#include "stages/label.hpp"
 
 namespace occseg::sim {
 

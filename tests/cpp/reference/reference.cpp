@@ -6,7 +6,7 @@
 #include <limits>
 #include <memory>
 
-#include "occseg/refine.hpp"
+#include "stages/refine.hpp"
 
 namespace occseg::reference {
 

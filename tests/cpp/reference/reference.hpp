@@ -5,11 +5,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "occseg/components.hpp"
-#include "occseg/divide.hpp"
+#include "stages/label.hpp"
+#include "stages/divide.hpp"
 #include "occseg/grid.hpp"
 #include "occseg/params.hpp"
-#include "occseg/texture.hpp"
+#include "stages/texture.hpp"
 
 namespace occseg::reference {
 

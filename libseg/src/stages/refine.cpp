@@ -1,12 +1,12 @@
-#include "occseg/refine.hpp"
+#include "stages/refine.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <utility>
 
 #include "occseg/parallel.hpp"
-#include "huge_pages.hpp"
-#include "own_states_internal.hpp"
+#include "util/huge_pages.hpp"
+#include "stages/own_states.hpp"
 
 #ifdef __SSE2__
 #include <emmintrin.h>

@@ -5,18 +5,10 @@
 
 #include "occseg/grid.hpp"
 #include "occseg/params.hpp"
-#include "occseg/texture.hpp"
+#include "occseg/result.hpp"
+#include "stages/texture.hpp"
 
 namespace occseg {
-
-// An axis-aligned box of voxels, [lo, hi) on each axis.
-struct Block {
-  std::uint32_t lo[3];
-  std::uint32_t hi[3];
-  std::uint64_t volume() const {
-    return std::uint64_t(hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
-  }
-};
 
 // The split decision of eq. (2) over the G-statistics of all pairs of sibling histograms:
 // split when Gmax / Gmin > X. Gmin = 0 with Gmax > 0 is an infinite ratio (split); all G = 0 means

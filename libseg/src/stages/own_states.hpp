@@ -5,11 +5,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "occseg/divide.hpp"
+#include "stages/divide.hpp"
 #include "occseg/grid.hpp"
 #include "occseg/params.hpp"
 #include "occseg/uninit_vector.hpp"
-#include "bit_rows_internal.hpp"
+#include "util/bit_rows.hpp"
 
 #ifdef __SSE2__
 #include <emmintrin.h>

@@ -1,4 +1,4 @@
-#include "huge_pages.hpp"
+#include "util/huge_pages.hpp"
 
 #include <algorithm>
 #include <cstdint>

@@ -1,16 +1,16 @@
-#include "occseg/departures.hpp"
+#include "rules/departures.hpp"
 
 #include <algorithm>
 #include <cstdint>
 #include <mutex>
 
 #include "occseg/parallel.hpp"
-#include "bit_rows_internal.hpp"
-#include "cpu_features.hpp"
-#include "huge_pages.hpp"
-#include "own_states_internal.hpp"
-#include "occseg/refine.hpp"
-#include "occseg/texture.hpp"
+#include "util/bit_rows.hpp"
+#include "kernels/cpu_features.hpp"
+#include "util/huge_pages.hpp"
+#include "stages/own_states.hpp"
+#include "stages/refine.hpp"
+#include "stages/texture.hpp"
 
 #ifdef __SSE2__
 #include <emmintrin.h>

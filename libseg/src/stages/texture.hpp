@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "occseg/grid.hpp"
+#include "occseg/texture_codes.hpp"
 
 namespace occseg {
 
@@ -42,16 +43,6 @@ class ContrastQuantizer {
  private:
   int bins_ = 0;
   std::vector<std::uint8_t> lut_;  // fine step -> level 1..bins-1
-};
-
-// Code value marking a voxel on the map's outer faces: it has no texture unit.
-constexpr std::uint16_t kNoTexture = 0xFFFF;
-
-struct TextureMap {
-  std::vector<std::uint16_t> codes;  // lbp * bins + contrast level, or kNoTexture
-  int bins = 0;                      // contrast levels
-  int codes_total = 0;               // distinct codes of other operators (registry.hpp); 0: 64 * bins
-  int code_count() const { return codes_total ? codes_total : 64 * bins; }
 };
 
 // Computes the texture code of every voxel: a first pass collects the contrast distribution for

@@ -12,7 +12,7 @@
 
 #include "occseg/error.hpp"
 #include "occseg/registry.hpp"
-#include "registry_internal.hpp"
+#include "registry/registry_internal.hpp"
 
 // Set by libseg/CMakeLists.txt: the configured install folder, and the same folder relative to
 // the library folder and to the program folder (for installs moved after building).

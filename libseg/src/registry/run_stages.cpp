@@ -7,7 +7,8 @@
 #include "occseg/error.hpp"
 #include "occseg/parallel.hpp"
 #include "occseg/registry.hpp"
-#include "registry_internal.hpp"
+#include "registry/registry_internal.hpp"
+#include "stages/texture.hpp"
 
 struct occseg_plugin_map_sink {
   occseg::Grid grid;

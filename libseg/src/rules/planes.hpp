@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "occseg/components.hpp"
+#include "stages/label.hpp"
 #include "occseg/grid.hpp"
 
 namespace occseg {

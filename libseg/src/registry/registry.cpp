@@ -11,7 +11,7 @@
 #include <shared_mutex>
 
 #include "occseg/error.hpp"
-#include "registry_internal.hpp"
+#include "registry/registry_internal.hpp"
 
 struct occseg_plugin_registrar {
   std::string plugin;  // name of the plugin registering

@@ -11,8 +11,8 @@
 
 #include "occseg/error.hpp"
 #include "occseg/parallel.hpp"
-#include "cpu_features.hpp"
-#include "huge_pages.hpp"
+#include "kernels/cpu_features.hpp"
+#include "util/huge_pages.hpp"
 
 namespace occseg {
 

@@ -11,19 +11,19 @@
 #endif
 
 #include "occseg/context.hpp"
-#include "occseg/create.hpp"
-#include "occseg/departures.hpp"
+#include "stages/create.hpp"
+#include "rules/departures.hpp"
 #include "occseg/error.hpp"
 #include "occseg/parallel.hpp"
-#include "occseg/planes.hpp"
-#include "occseg/refine.hpp"
+#include "rules/planes.hpp"
+#include "stages/refine.hpp"
 #include "occseg/registry.hpp"
-#include "occseg/texture.hpp"
-#include "codes_internal.hpp"
-#include "huge_pages.hpp"
-#include "own_states_internal.hpp"
-#include "parallel_pool.hpp"
-#include "segment_internal.hpp"
+#include "stages/texture.hpp"
+#include "stages/codes.hpp"
+#include "util/huge_pages.hpp"
+#include "stages/own_states.hpp"
+#include "util/parallel_pool.hpp"
+#include "pipeline/segment_internal.hpp"
 
 namespace occseg {
 

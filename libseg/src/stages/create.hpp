@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "occseg/divide.hpp"
+#include "stages/divide.hpp"
 #include "occseg/grid.hpp"
 #include "occseg/params.hpp"
 

@@ -16,13 +16,13 @@
 #include <immintrin.h>
 #endif
 
-#include "occseg/create.hpp"
+#include "stages/create.hpp"
 #include "occseg/parallel.hpp"
-#include "occseg/texture.hpp"
-#include "bit_rows_internal.hpp"
-#include "cpu_features.hpp"
-#include "own_states_internal.hpp"
-#include "thread_scratch.hpp"
+#include "stages/texture.hpp"
+#include "util/bit_rows.hpp"
+#include "kernels/cpu_features.hpp"
+#include "stages/own_states.hpp"
+#include "util/thread_scratch.hpp"
 
 namespace occseg::detail {
 

@@ -1,19 +1,19 @@
-#include "occseg/texture.hpp"
+#include "stages/texture.hpp"
 
 #include <algorithm>
 #include <atomic>
 #include <cstring>
 #include <immintrin.h>
 
-#include "occseg/create.hpp"
+#include "stages/create.hpp"
 #include "occseg/error.hpp"
 #include "occseg/parallel.hpp"
-#include "cpu_features.hpp"
-#include "codes_internal.hpp"
-#include "huge_pages.hpp"
-#include "lane_pack_internal.hpp"
-#include "own_states_internal.hpp"
-#include "thread_scratch.hpp"
+#include "kernels/cpu_features.hpp"
+#include "stages/codes.hpp"
+#include "util/huge_pages.hpp"
+#include "kernels/lane_pack.hpp"
+#include "stages/own_states.hpp"
+#include "util/thread_scratch.hpp"
 
 namespace occseg {
 

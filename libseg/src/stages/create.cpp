@@ -1,4 +1,4 @@
-#include "occseg/create.hpp"
+#include "stages/create.hpp"
 
 #include <algorithm>
 #include <cstring>
@@ -10,11 +10,11 @@
 #endif
 
 #include "occseg/parallel.hpp"
-#include "occseg/texture.hpp"
-#include "cpu_features.hpp"
-#include "huge_pages.hpp"
-#include "bit_rows_internal.hpp"
-#include "own_states_internal.hpp"
+#include "stages/texture.hpp"
+#include "kernels/cpu_features.hpp"
+#include "util/huge_pages.hpp"
+#include "util/bit_rows.hpp"
+#include "stages/own_states.hpp"
 
 namespace occseg {
 

@@ -6,19 +6,10 @@
 
 #include "occseg/grid.hpp"
 #include "occseg/params.hpp"
+#include "occseg/result.hpp"
 #include "occseg/uninit_vector.hpp"
 
 namespace occseg {
-
-struct Segment {
-  std::uint32_t id = 0;
-  State state = State::unknown;
-  std::uint64_t voxels = 0;
-  double mop = 0;                                  // mean occupancy probability of its voxels
-  std::array<std::uint32_t, 3> bbox_min{0, 0, 0};  // voxel indices, inclusive
-  std::array<std::uint32_t, 3> bbox_max{0, 0, 0};
-  std::array<double, 3> centroid{0, 0, 0};         // mean voxel index (x, y, z)
-};
 
 // z-planes per labelling slab. Slabs are labelled in parallel. The mean occupancy of a segment
 // is summed run by run (a run: a maximal stretch of the segment along x within a row): voxel k of

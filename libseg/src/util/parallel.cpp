@@ -1,6 +1,6 @@
 #include "occseg/parallel.hpp"
 
-#include "parallel_pool.hpp"
+#include "util/parallel_pool.hpp"
 
 #include <algorithm>
 #include <atomic>

@@ -1,4 +1,4 @@
-#include "occseg/planes.hpp"
+#include "rules/planes.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -6,7 +6,7 @@
 #include <limits>
 
 #include "occseg/parallel.hpp"
-#include "cpu_features.hpp"
+#include "kernels/cpu_features.hpp"
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>

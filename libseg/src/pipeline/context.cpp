@@ -14,8 +14,8 @@
 
 #include "occseg/error.hpp"
 #include "occseg/parallel.hpp"
-#include "parallel_pool.hpp"
-#include "segment_internal.hpp"
+#include "util/parallel_pool.hpp"
+#include "pipeline/segment_internal.hpp"
 
 namespace occseg {
 

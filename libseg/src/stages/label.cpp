@@ -1,4 +1,4 @@
-#include "occseg/components.hpp"
+#include "stages/label.hpp"
 
 #include <algorithm>
 #include <functional>
@@ -8,11 +8,11 @@
 
 #include "occseg/error.hpp"
 #include "occseg/parallel.hpp"
-#include "occseg/texture.hpp"
-#include "cpu_features.hpp"
-#include "huge_pages.hpp"
-#include "segment_internal.hpp"
-#include "thread_scratch.hpp"
+#include "stages/texture.hpp"
+#include "kernels/cpu_features.hpp"
+#include "util/huge_pages.hpp"
+#include "pipeline/segment_internal.hpp"
+#include "util/thread_scratch.hpp"
 
 #ifdef __SSE2__
 #include <emmintrin.h>

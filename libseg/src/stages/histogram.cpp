@@ -1,4 +1,4 @@
-#include "occseg/histogram.hpp"
+#include "stages/histogram.hpp"
 
 #include <cmath>
 

@@ -7,7 +7,7 @@
 
 #include "occseg/error.hpp"
 #include "occseg/registry.hpp"
-#include "registry_internal.hpp"
+#include "registry/registry_internal.hpp"
 
 namespace occseg {
 

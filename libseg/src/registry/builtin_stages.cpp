@@ -7,11 +7,11 @@
 #include <vector>
 
 #include "occseg/error.hpp"
-#include "occseg/histogram.hpp"
-#include "occseg/texture.hpp"
-#include "occseg/texture2d.hpp"
-#include "codes_internal.hpp"
-#include "registry_internal.hpp"
+#include "stages/histogram.hpp"
+#include "stages/texture.hpp"
+#include "stages/texture2d.hpp"
+#include "stages/codes.hpp"
+#include "registry/registry_internal.hpp"
 
 namespace occseg {
 

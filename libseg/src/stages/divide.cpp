@@ -1,4 +1,4 @@
-#include "occseg/divide.hpp"
+#include "stages/divide.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -14,14 +14,14 @@
 #endif
 
 #include "occseg/error.hpp"
-#include "occseg/histogram.hpp"
+#include "stages/histogram.hpp"
 #include "occseg/parallel.hpp"
 #include "occseg/registry.hpp"
-#include "occseg/texture.hpp"
-#include "codes_internal.hpp"
-#include "cpu_features.hpp"
-#include "lane_pack_internal.hpp"
-#include "thread_scratch.hpp"
+#include "stages/texture.hpp"
+#include "stages/codes.hpp"
+#include "kernels/cpu_features.hpp"
+#include "kernels/lane_pack.hpp"
+#include "util/thread_scratch.hpp"
 
 namespace occseg {
 
