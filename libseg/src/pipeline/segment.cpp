@@ -20,6 +20,7 @@
 #include "occseg/registry.hpp"
 #include "stages/texture.hpp"
 #include "stages/codes.hpp"
+#include "kernels/kernels.hpp"
 #include "util/huge_pages.hpp"
 #include "stages/own_states.hpp"
 #include "util/parallel_pool.hpp"
@@ -113,6 +114,9 @@ Result segment(const Grid& grid, const Params& params, bool keep_stages) {
 Result segment_into(const Grid& grid, const Params& params, bool keep_stages, LabelArray&& labels,
                     Workspace* workspace) {
   params.validate();
+  // The kernels of this call, chosen once on the calling thread and handed to every stage.
+  const kernels::Table& k = kernels::active();
+  (void)k;
   // The built-in texture operator checks the values itself (compute_texture); plugins get a
   // checked map.
   const TextureOperator* op = find_texture(params.texture);
