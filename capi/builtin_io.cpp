@@ -10,6 +10,7 @@
 #include "occseg/npy.hpp"
 #include "occseg/nrrd.hpp"
 #include "occseg/occseg_plugin.h"
+#include "occseg/plugin_host.hpp"
 #include "occseg/registry.hpp"
 
 namespace {

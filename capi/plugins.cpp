@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "internal.hpp"
+#include "occseg/occseg_plugin.h"
 #include "occseg/registry.hpp"
 
 using occseg::Error;

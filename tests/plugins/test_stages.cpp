@@ -13,6 +13,7 @@
 
 #include "occseg/error.hpp"
 #include "stages/histogram.hpp"
+#include "occseg/plugin_host.hpp"
 #include "occseg/registry.hpp"
 #include "occseg/segment.hpp"
 #include "stages/texture.hpp"
@@ -145,18 +146,11 @@ TEST(Lbp6, GenericCallbackMatchesFastPath) {
   for (Dims d : {Dims{21, 17, 9}, Dims{30, 20, 1}}) {
     const Grid g = random_grid(d, 7);
     const TextureMap fast = compute_texture(g, 8, 2);
-    occseg_plugin_grid view{};
-    view.struct_size = sizeof view;
-    view.dims[0] = d.nx;
-    view.dims[1] = d.ny;
-    view.dims[2] = d.nz;
-    view.values = g.p.data();
-    view.voxel_size = 1;
     Params p;
-    occseg_plugin_call call{sizeof call, 2, nullptr, nullptr, &p};
-    std::vector<std::uint16_t> codes(d.count(), 1234);
-    ASSERT_EQ(op->compute(&call, &view, 8, codes.data()), 64 * 8);
-    EXPECT_EQ(codes, fast.codes);
+    p.threads = 2;
+    const TextureMap generic = op->compute(g, p);  // the C callback, through the plugin host
+    EXPECT_EQ(generic.codes_total, 64 * 8);
+    EXPECT_EQ(generic.codes, fast.codes);
   }
 }
 

@@ -10,6 +10,7 @@
 #include "commands.hpp"
 #include "occseg/error.hpp"
 #include "occseg/params.hpp"
+#include "occseg/occseg_plugin.h"
 #include "occseg/registry.hpp"
 
 namespace occseg::cli {

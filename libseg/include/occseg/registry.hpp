@@ -1,6 +1,8 @@
 // The process-wide registry of pipeline stages (texture operators, histogram similarities), map
 // readers and writers, and plugin-declared parameters, filled by the built-in stages and by
-// plugins (occseg/occseg_plugin.h) through one interface.
+// plugins through one interface. The entries are C++: the plugin host (libseg/src/registry/, the
+// only part of the core that sees the C plugin ABI, occseg/occseg_plugin.h) wraps a plugin's C
+// callbacks into them when it registers them.
 //
 // Thread safety: every function here may be called from any thread. Registration (loading a
 // plugin) is serialised and transactional: a plugin's entries become visible all at once when
@@ -8,12 +10,13 @@
 // visible, so the pointers returned by the find_* functions stay valid for the life of the
 // process and may be used while other threads load plugins.
 #pragma once
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "occseg/grid.hpp"
-#include "occseg/occseg_plugin.h"
 #include "occseg/params.hpp"
 #include "occseg/texture_codes.hpp"
 
@@ -28,8 +31,10 @@ constexpr const char* kBuiltinPlugin = "builtin";
 
 struct TextureOperator {
   std::string name, description, plugin;
-  occseg_plugin_texture_fn compute = nullptr;
-  void* user = nullptr;
+  // The operator through its plugin's callback: every voxel's code, checked against the count of
+  // distinct codes it returns (TextureMap::codes_total). Throws Error(plugin) naming the operator
+  // when the callback fails or returns invalid codes.
+  std::function<TextureMap(const Grid& grid, const Params& params)> compute;
   // Built-in operators only: a direct C++ implementation the pipeline prefers (no copy). It must
   // reject values outside [0, 1] itself, as compute_texture() does: segment() leaves the value
   // check to an operator that has one, and checks the map first for the others.
@@ -48,20 +53,21 @@ struct TextureOperator {
 
 struct Similarity {
   std::string name, description, plugin;
-  occseg_plugin_similarity_fn compare = nullptr;
-  void* user = nullptr;
+  // The plugin's measure of two histograms of `bins` counts, as it returned it (compare_histograms
+  // checks it).
+  std::function<double(const std::uint32_t* a, const std::uint32_t* b, std::size_t bins)> compare;
 };
 
 struct MapReader {
   std::string extension, description, plugin;  // extension: lower case, with the dot
-  occseg_plugin_read_fn read = nullptr;
-  void* user = nullptr;
+  // Reads the map at `path`; throws Error with the reader's status and message on failure.
+  std::function<Grid(const std::string& path, const std::vector<std::string>& options)> read;
 };
 
 struct MapWriter {
   std::string extension, description, plugin;
-  occseg_plugin_write_fn write = nullptr;
-  void* user = nullptr;
+  // Writes `grid` to `path`; throws Error with the writer's status and message on failure.
+  std::function<void(const std::string& path, const Grid& grid, const std::vector<std::string>& options)> write;
 };
 
 struct PluginParam {
@@ -94,10 +100,6 @@ std::vector<const PluginParam*> plugin_params();
 // "a, b, c": the registered names of one kind, for error messages.
 std::string texture_names();
 std::string similarity_names();
-
-// Registers a plugin compiled into the program (the built-in stages, the built-in .npy/.nrrd
-// readers). Throws Error(plugin) like load_plugin.
-void register_static_plugin(const occseg_plugin_descriptor* descriptor);
 
 // Loads one plugin file (dlopen, entry point, ABI check, register function). Throws
 // Error(plugin) "plugin '<path>': <reason>" and leaves the registry unchanged on any failure.

@@ -141,7 +141,7 @@ int host_register_texture(occseg_plugin_registrar* r, const occseg_plugin_textur
   const std::string owner = owner_of(g.textures, r->textures, t->name, &TextureOperator::name);
   if (!owner.empty())
     return refuse(OCCSEG_EPLUGIN, std::string("texture operator '") + t->name + "' is already registered by plugin '" + owner + "'");
-  r->textures.push_back({t->name, text(t->description), r->plugin, t->compute, t->user, nullptr});
+  r->textures.push_back({t->name, text(t->description), r->plugin, plugin_texture(t->compute, t->user, t->name, r->plugin)});
   return 0;
 }
 
@@ -154,12 +154,12 @@ int host_register_similarity(occseg_plugin_registrar* r, const occseg_plugin_sim
   const std::string owner = owner_of(g.similarities, r->similarities, s->name, &Similarity::name);
   if (!owner.empty())
     return refuse(OCCSEG_EPLUGIN, std::string("similarity '") + s->name + "' is already registered by plugin '" + owner + "'");
-  r->similarities.push_back({s->name, text(s->description), r->plugin, s->compare, s->user});
+  r->similarities.push_back({s->name, text(s->description), r->plugin, plugin_similarity(s->compare, s->user)});
   return 0;
 }
 
-template <class S, class E, class Fn>
-int register_file_kind(occseg_plugin_registrar* r, const S* s, const char* what, Fn fn,
+template <class S, class E, class Fn, class Wrap>
+int register_file_kind(occseg_plugin_registrar* r, const S* s, const char* what, Fn fn, Wrap wrap,
                        std::vector<std::unique_ptr<E>> Registry::*committed, std::vector<E> occseg_plugin_registrar::*pending) {
   if (int rc = check_call(r, s, what)) return rc;
   if (!valid_extension(s->extension))
@@ -171,16 +171,16 @@ int register_file_kind(occseg_plugin_registrar* r, const S* s, const char* what,
   const std::string owner = owner_of(g.*committed, r->*pending, ext, &E::extension);
   if (!owner.empty())
     return refuse(OCCSEG_EPLUGIN, std::string(what) + ": extension '" + ext + "' is already handled by plugin '" + owner + "'");
-  (r->*pending).push_back({ext, text(s->description), r->plugin, fn, s->user});
+  (r->*pending).push_back({ext, text(s->description), r->plugin, wrap(fn, s->user, r->plugin)});
   return 0;
 }
 
 int host_register_reader(occseg_plugin_registrar* r, const occseg_plugin_reader* s) {
-  return register_file_kind(r, s, "register_reader", s ? s->read : nullptr, &Registry::readers, &occseg_plugin_registrar::readers);
+  return register_file_kind(r, s, "register_reader", s ? s->read : nullptr, plugin_reader, &Registry::readers, &occseg_plugin_registrar::readers);
 }
 
 int host_register_writer(occseg_plugin_registrar* r, const occseg_plugin_writer* s) {
-  return register_file_kind(r, s, "register_writer", s ? s->write : nullptr, &Registry::writers, &occseg_plugin_registrar::writers);
+  return register_file_kind(r, s, "register_writer", s ? s->write : nullptr, plugin_writer, &Registry::writers, &occseg_plugin_registrar::writers);
 }
 
 int host_declare_param(occseg_plugin_registrar* r, const occseg_plugin_param* p) {

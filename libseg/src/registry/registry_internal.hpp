@@ -1,10 +1,11 @@
-// Shared by registry.cpp, plugin_loader.cpp, stages.cpp, builtin_stages.cpp and params.cpp:
+// Shared by the plugin host (registry.cpp, plugin_loader.cpp, run_stages.cpp, builtin_stages.cpp) and params.cpp:
 // the pieces of the registry that are not public API.
 #pragma once
 #include <cstdint>
 #include <string>
 
 #include "occseg/occseg_plugin.h"
+#include "occseg/plugin_host.hpp"
 #include "occseg/params.hpp"
 #include "occseg/registry.hpp"
 
@@ -27,7 +28,19 @@ void set_plugin_error(const std::string& message);
 void clear_plugin_error();
 std::string plugin_error();  // "(no message)" when none was set
 
-// Host functions implemented in stages.cpp.
+// The C++ entries' callables around a plugin's C callbacks (run_stages.cpp): each sets up the
+// call, turns the callback's failure into an Error naming the stage and its plugin, and checks
+// what it returned.
+std::function<TextureMap(const Grid&, const Params&)> plugin_texture(occseg_plugin_texture_fn fn, void* user,
+                                                                     const std::string& name, const std::string& plugin);
+std::function<double(const std::uint32_t*, const std::uint32_t*, std::size_t)> plugin_similarity(
+    occseg_plugin_similarity_fn fn, void* user);
+std::function<Grid(const std::string&, const std::vector<std::string>&)> plugin_reader(occseg_plugin_read_fn fn, void* user,
+                                                                                        const std::string& plugin);
+std::function<void(const std::string&, const Grid&, const std::vector<std::string>&)> plugin_writer(
+    occseg_plugin_write_fn fn, void* user, const std::string& plugin);
+
+// Host functions implemented in run_stages.cpp.
 int host_param_get_int(const occseg_plugin_call* call, const char* name, int64_t* out);
 int host_param_get_double(const occseg_plugin_call* call, const char* name, double* out);
 int host_param_get_string(const occseg_plugin_call* call, const char* name, char* buf, size_t size);

@@ -1,5 +1,6 @@
-// Running registered stages: the texture operator and the similarity the parameters name, map
-// readers and writers by extension, and the host functions callbacks use while they run.
+// Running registered stages (part of the plugin host): the C++ callables around plugins' C
+// callbacks, the texture operator and the similarity the parameters name, map readers and
+// writers by extension, and the host functions callbacks use while they run.
 #include <cmath>
 #include <cstring>
 #include <sstream>
@@ -174,35 +175,87 @@ int host_contrast_levels(const double* contrast, size_t count, uint32_t bins, ui
   }
 }
 
+std::function<TextureMap(const Grid&, const Params&)> plugin_texture(occseg_plugin_texture_fn fn, void* user,
+                                                                     const std::string& name, const std::string& plugin) {
+  const std::string who = "texture operator '" + name + "' (plugin '" + plugin + "')";
+  return [fn, user, who](const Grid& grid, const Params& params) {
+    TextureMap tm;
+    tm.bins = params.contrast_bins;
+    tm.codes.assign(grid.dims.count(), static_cast<std::uint16_t>(OCCSEG_NO_TEXTURE));
+    const occseg_plugin_grid view = grid_view(grid);
+    const occseg_plugin_call call = make_call(user, &params);
+    clear_plugin_error();
+    int64_t k = 0;
+    try {
+      k = fn(&call, &view, static_cast<uint32_t>(params.contrast_bins), tm.codes.data());
+    } catch (...) {
+      throw Error(Status::plugin, who + ": an exception escaped the callback");
+    }
+    if (k < 0) throw Error(status_of(k), who + " failed: " + plugin_error());
+    if (k == 0 || k > 65535)
+      throw Error(Status::plugin, who + " returned " + std::to_string(k) + " codes (must be 1 .. 65535)");
+    // A code past the histogram would be written out of bounds by the division: check them all.
+    for (std::size_t i = 0; i < tm.codes.size(); ++i)
+      if (tm.codes[i] >= k && tm.codes[i] != OCCSEG_NO_TEXTURE)
+        throw Error(Status::plugin, who + ": code " + std::to_string(tm.codes[i]) + " at voxel " + coords(grid.dims, i) +
+                                        " is outside [0, " + std::to_string(k) + ")");
+    tm.codes_total = static_cast<int>(k);
+    return tm;
+  };
+}
+
+std::function<double(const std::uint32_t*, const std::uint32_t*, std::size_t)> plugin_similarity(
+    occseg_plugin_similarity_fn fn, void* user) {
+  return [fn, user](const std::uint32_t* a, const std::uint32_t* b, std::size_t bins) {
+    const occseg_plugin_call call = make_call(user, nullptr);
+    return fn(&call, a, b, bins);
+  };
+}
+
+std::function<Grid(const std::string&, const std::vector<std::string>&)> plugin_reader(occseg_plugin_read_fn fn, void* user,
+                                                                                        const std::string& plugin) {
+  return [fn, user, plugin](const std::string& path, const std::vector<std::string>& options) {
+    occseg_plugin_map_sink sink;
+    const auto opts = option_array(options);
+    const occseg_plugin_call call = make_call(user, nullptr);
+    clear_plugin_error();
+    int rc = 0;
+    try {
+      rc = fn(&call, path.c_str(), opts.data(), &sink);
+    } catch (...) {
+      throw Error(Status::plugin, "'" + path + "': an exception escaped the reader of plugin '" + plugin + "'");
+    }
+    const std::string by = plugin == kBuiltinPlugin ? "" : " [reader of plugin '" + plugin + "']";
+    if (rc != 0) throw Error(status_of(rc), plugin_error() + by);
+    if (!sink.filled) throw Error(Status::plugin, "'" + path + "': the reader returned no map" + by);
+    return std::move(sink.grid);
+  };
+}
+
+std::function<void(const std::string&, const Grid&, const std::vector<std::string>&)> plugin_writer(
+    occseg_plugin_write_fn fn, void* user, const std::string& plugin) {
+  return [fn, user, plugin](const std::string& path, const Grid& grid, const std::vector<std::string>& options) {
+    const occseg_plugin_grid view = grid_view(grid);
+    const auto opts = option_array(options);
+    const occseg_plugin_call call = make_call(user, nullptr);
+    clear_plugin_error();
+    int rc = 0;
+    try {
+      rc = fn(&call, path.c_str(), &view, opts.data());
+    } catch (...) {
+      throw Error(Status::plugin, "'" + path + "': an exception escaped the writer of plugin '" + plugin + "'");
+    }
+    if (rc != 0)
+      throw Error(status_of(rc), plugin_error() + (plugin == kBuiltinPlugin ? "" : " [writer of plugin '" + plugin + "']"));
+  };
+}
+
 TextureMap run_texture(const Grid& grid, const Params& params) {
   const TextureOperator* op = find_texture(params.texture);
   if (!op)
     throw Error(Status::invalid_argument, "parameter 'texture': no texture operator '" + params.texture +
                                               "' is registered (registered: " + texture_names() + ")");
-  if (op->native) return op->native(grid, params);
-  TextureMap tm;
-  tm.bins = params.contrast_bins;
-  tm.codes.assign(grid.dims.count(), static_cast<std::uint16_t>(OCCSEG_NO_TEXTURE));
-  const occseg_plugin_grid view = grid_view(grid);
-  const occseg_plugin_call call = make_call(op->user, &params);
-  const std::string who = "texture operator '" + op->name + "' (plugin '" + op->plugin + "')";
-  clear_plugin_error();
-  int64_t k = 0;
-  try {
-    k = op->compute(&call, &view, static_cast<uint32_t>(params.contrast_bins), tm.codes.data());
-  } catch (...) {
-    throw Error(Status::plugin, who + ": an exception escaped the callback");
-  }
-  if (k < 0) throw Error(status_of(k), who + " failed: " + plugin_error());
-  if (k == 0 || k > 65535)
-    throw Error(Status::plugin, who + " returned " + std::to_string(k) + " codes (must be 1 .. 65535)");
-  // A code past the histogram would be written out of bounds by the division: check them all.
-  for (std::size_t i = 0; i < tm.codes.size(); ++i)
-    if (tm.codes[i] >= k && tm.codes[i] != OCCSEG_NO_TEXTURE)
-      throw Error(Status::plugin, who + ": code " + std::to_string(tm.codes[i]) + " at voxel " + coords(grid.dims, i) +
-                                      " is outside [0, " + std::to_string(k) + ")");
-  tm.codes_total = static_cast<int>(k);
-  return tm;
+  return op->native ? op->native(grid, params) : op->compute(grid, params);
 }
 
 const Similarity* division_similarity(const Params& params) {
@@ -214,8 +267,7 @@ const Similarity* division_similarity(const Params& params) {
 }
 
 double compare_histograms(const Similarity& s, const std::uint32_t* a, const std::uint32_t* b, std::size_t bins) {
-  const occseg_plugin_call call = make_call(s.user, nullptr);
-  const double v = s.compare(&call, a, b, bins);
+  const double v = s.compare(a, b, bins);
   if (!(v >= 0)) {  // NaN too
     std::ostringstream o;
     o << "similarity '" << s.name << "' (plugin '" << s.plugin << "') returned " << v << " (must be >= 0)";
@@ -231,25 +283,14 @@ Grid read_map(const std::string& path, const std::vector<std::string>& options) 
     throw Error(Status::unsupported, "'" + path + "': no reader for " +
                                          (ext.empty() ? std::string("a file without extension") : "extension '" + ext + "'") +
                                          " (readers: " + extension_list(map_readers()) + "; plugins add others)");
-  occseg_plugin_map_sink sink;
-  const auto opts = option_array(options);
-  const occseg_plugin_call call = make_call(r->user, nullptr);
-  clear_plugin_error();
-  int rc = 0;
+  Grid grid = r->read(path, options);
   try {
-    rc = r->read(&call, path.c_str(), opts.data(), &sink);
-  } catch (...) {
-    throw Error(Status::plugin, "'" + path + "': an exception escaped the reader of plugin '" + r->plugin + "'");
-  }
-  const std::string by = r->plugin == kBuiltinPlugin ? "" : " [reader of plugin '" + r->plugin + "']";
-  if (rc != 0) throw Error(status_of(rc), plugin_error() + by);
-  if (!sink.filled) throw Error(Status::plugin, "'" + path + "': the reader returned no map" + by);
-  try {
-    check_probabilities(sink.grid);
+    check_probabilities(grid);
   } catch (const Error& e) {
-    throw Error(e.status(), "'" + path + "': " + e.what() + by);
+    throw Error(e.status(), "'" + path + "': " + e.what() +
+                                (r->plugin == kBuiltinPlugin ? "" : " [reader of plugin '" + r->plugin + "']"));
   }
-  return std::move(sink.grid);
+  return grid;
 }
 
 void write_map(const std::string& path, const Grid& grid, const std::vector<std::string>& options) {
@@ -259,18 +300,7 @@ void write_map(const std::string& path, const Grid& grid, const std::vector<std:
     throw Error(Status::unsupported, "'" + path + "': no writer for " +
                                          (ext.empty() ? std::string("a file without extension") : "extension '" + ext + "'") +
                                          " (writers: " + extension_list(map_writers()) + "; plugins add others)");
-  const occseg_plugin_grid view = grid_view(grid);
-  const auto opts = option_array(options);
-  const occseg_plugin_call call = make_call(w->user, nullptr);
-  clear_plugin_error();
-  int rc = 0;
-  try {
-    rc = w->write(&call, path.c_str(), &view, opts.data());
-  } catch (...) {
-    throw Error(Status::plugin, "'" + path + "': an exception escaped the writer of plugin '" + w->plugin + "'");
-  }
-  if (rc != 0)
-    throw Error(status_of(rc), plugin_error() + (w->plugin == kBuiltinPlugin ? "" : " [writer of plugin '" + w->plugin + "']"));
+  w->write(path, grid, options);
 }
 
 }  // namespace occseg
