@@ -11,14 +11,15 @@ liboccseg.so.0 serves. See docs/python.md.
 """
 from . import _lib
 from ._context import Context
-from ._errors import OccsegError, Status
+from ._errors import OccsegError, OccsegTypeError, OccsegValueError, Status
 from ._handles import live_handles
 from ._map import Map, read_map
 from ._params import ParamInfo, param_table
 from ._result import Result, Segment, State
 from ._segment import segment
 
-__all__ = ["segment", "read_map", "Map", "Result", "Context", "Segment", "State", "Status", "OccsegError", "ParamInfo",
+__all__ = ["segment", "read_map", "Map", "Result", "Context", "Segment", "State", "Status", "OccsegError",
+           "OccsegTypeError", "OccsegValueError", "ParamInfo",
            "param_table", "version", "version_number", "library_path", "live_handles"]
 
 

@@ -2,6 +2,7 @@
 (occseg_context_*), for programs that segment again and again."""
 import ctypes
 
+from ._args import c_integer
 from ._errors import OccsegError, Status, check
 from ._handles import Owned
 from ._lib import has, lib
@@ -12,23 +13,26 @@ class Context(Owned):
     """A pool of `threads` threads in all (0: one per core), kept until close(). Pass it to
     occseg.segment(..., context=ctx): the stages run on its threads instead of starting new ones
     in each of them; the result is identical. One segmentation at a time per context (calls from
-    several threads wait for each other). Needs a liboccseg with the occseg_context_* functions."""
+    several threads wait for each other). Needs a liboccseg with the occseg_context_* functions.
+
+    close() never stops the threads under a running call: closed while a segmentation runs on it
+    (from another thread, or from that segmentation's progress callback), the context refuses new
+    calls at once and is freed when the running one returns."""
 
     _what = "occseg.Context"
 
     def __init__(self, threads=0):
         if not has("occseg_context_new"):
             raise OccsegError(Status.EUNSUPPORTED, "occseg.Context: the loaded liboccseg has no occseg_context_new")
-        if isinstance(threads, bool) or not isinstance(threads, int):
-            raise OccsegError(Status.EINVAL, f"occseg.Context: threads must be an int, not {type(threads).__name__}")
+        n = c_integer("occseg.Context", "threads", threads, ctypes.c_int)  # the library checks [0, 1024]
         out = ctypes.c_void_p()
-        check(lib.occseg_context_new(ctypes.byref(out), threads))
+        check(lib.occseg_context_new(ctypes.byref(out), n))
         self._own(out, "context", lib.occseg_context_free)
 
     @property
     def threads(self):
         """Threads a call runs on, the calling thread included."""
-        return int(lib.occseg_context_threads(self.handle))
+        return int(self._call(lib.occseg_context_threads))
 
     def recycle(self, result):
         """Hands back an occseg.Result you are done with: the next occseg.segment(...,
@@ -36,15 +40,19 @@ class Context(Owned):
         fresh memory (about 7 % of a call on a 320 x 320 x 128 map; the context holds the array,
         4 bytes per voxel, until a call takes it; that call's peak is a plain call's). `result` is
         closed: its labels, segments and timings stay usable (they are Python copies), states()
-        and write() do not. A closed result is ignored."""
+        and write() do not. A closed result is ignored; a result that another thread is reading
+        (states(), write()) is closed, and freed without being kept, when that call returns."""
         if not has("occseg_context_recycle"):
             raise OccsegError(Status.EUNSUPPORTED, "occseg.Context.recycle: the loaded liboccseg has no occseg_context_recycle")
         if not isinstance(result, Result):
             raise OccsegError(Status.EINVAL, f"occseg.Context.recycle: expected an occseg.Result, not {type(result).__name__}")
-        context = self.handle  # ValueError if this context is closed, before the result is touched
-        handle = result._detach()
-        if handle is not None:
-            lib.occseg_context_recycle(context, handle)
+        with self._used() as context:  # ValueError if this context is closed, before the result is touched
+            handle = result._detach()
+            if handle is not None:
+                lib.occseg_context_recycle(context, handle)
 
     def __repr__(self):
-        return "<occseg.Context closed>" if self.closed else f"<occseg.Context threads={self.threads}>"
+        try:
+            return f"<occseg.Context threads={self.threads}>"
+        except ValueError:
+            return "<occseg.Context closed>"

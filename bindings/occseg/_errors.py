@@ -45,6 +45,17 @@ class OccsegError(Exception):
         return (type(self), (self.code, self.message))
 
 
+class OccsegTypeError(OccsegError, TypeError):
+    """An argument of the wrong type (a float or bool segment id, a str thread count, ...), refused
+    by the bindings before it reaches C: catch it as OccsegError or as TypeError."""
+
+
+class OccsegValueError(OccsegError, ValueError):
+    """An argument of the right type with a value the C ABI cannot take as it is (a NUL character
+    inside a path or name, an integer beyond its C type, a change of a map a running call uses),
+    refused by the bindings before it reaches C: catch it as OccsegError or as ValueError."""
+
+
 def check(code):
     """Raises OccsegError with the calling thread's occseg_last_error() text if code != 0."""
     if code != 0:

@@ -1,10 +1,10 @@
 """Map: an occseg_map handle, made from a NumPy array (without an intermediate copy) or a file."""
 import ctypes
-import os
 
 import numpy as np
 
-from ._errors import OccsegError, Status, check
+from ._args import path_bytes, real
+from ._errors import OccsegError, OccsegTypeError, OccsegValueError, Status, check
 from ._handles import Owned
 from ._lib import c_double3, c_ptrdiff3, c_size3, has, lib
 from ._text import option_array
@@ -48,7 +48,10 @@ class Map(Owned):
     a voxel edge length in metres and the world position of the outer corner of voxel (0, 0, 0).
 
     Make one with Map.from_array() or occseg.read_map(). The C handle is freed by close(), at the
-    end of a `with` block, or when the object is collected."""
+    end of a `with` block, or when the object is collected; never under a running call: closed
+    while a segmentation or write uses it (from another thread, or from the progress callback of
+    that segmentation), it refuses new calls at once and is freed when the running one returns.
+    Setting voxel_size or origin while a call uses the map raises OccsegValueError."""
 
     _what = "occseg.Map"
 
@@ -63,18 +66,18 @@ class Map(Owned):
         its strides. Float values must lie in [0, 1] unless `clamp` (out-of-range values and
         infinities go to the nearest bound) or `nan_unknown` (NaN becomes 0.5) is set."""
         arr = as_voxel_array(probabilities, "occseg_map_from_buffer")
+        vs = real("occseg.Map.from_array", "voxel_size", voxel_size)
+        o = None if origin is None else _origin_arg("occseg.Map.from_array", origin)
         data, dtype, dims, strides = buffer_args(arr)
         flags = (_IMPORT_CLAMP if clamp else 0) | (_IMPORT_NAN_UNKNOWN if nan_unknown else 0)
         out = ctypes.c_void_p()
-        check(lib.occseg_map_from_buffer_flags(ctypes.byref(out), data, dtype, dims, strides, float(voxel_size), flags))
-        return _configured(cls(out), None, origin)
+        check(lib.occseg_map_from_buffer_flags(ctypes.byref(out), data, dtype, dims, strides, vs, flags))
+        return _configured(cls(out), None, o)
 
     @property
     def dims(self):
         """(nx, ny, nz)."""
-        d = c_size3()
-        check(lib.occseg_map_dims(self.handle, d))
-        return tuple(d)
+        return self._call(map_dims)
 
     @property
     def shape(self):
@@ -84,43 +87,44 @@ class Map(Owned):
     @property
     def voxel_size(self):
         """Voxel edge length in metres (positive, finite)."""
-        v = ctypes.c_double()
-        check(lib.occseg_map_voxel_size(self.handle, ctypes.byref(v)))
-        return v.value
+        return self._call(map_voxel_size)
 
     @voxel_size.setter
     def voxel_size(self, value):
-        check(lib.occseg_map_set_voxel_size(self.handle, float(value)))
+        v = real("occseg.Map.voxel_size", "voxel_size", value)
+        self._exclusive("occseg.Map.voxel_size", lambda h: check(lib.occseg_map_set_voxel_size(h, v)))
 
     @property
     def origin(self):
         """World (x, y, z) of the outer corner of voxel (0, 0, 0), in metres."""
-        o = c_double3()
-        check(lib.occseg_map_origin(self.handle, o))
-        return tuple(o)
+        return self._call(map_origin)
 
     @origin.setter
     def origin(self, value):
-        x, y, z = (float(v) for v in value)
-        check(lib.occseg_map_set_origin(self.handle, c_double3(x, y, z)))
+        o = _origin_arg("occseg.Map.origin", value)
+        self._exclusive("occseg.Map.origin", lambda h: check(lib.occseg_map_set_origin(h, c_double3(*o))))
 
     def to_array(self):
         """The probabilities as a new float32 array [z, y, x]."""
-        out = np.empty(self.shape, dtype=np.float32)
-        check(lib.occseg_map_values(self.handle, out.ctypes.data, out.size))
+        with self._used() as h:
+            out = np.empty(tuple(reversed(map_dims(h))), dtype=np.float32)
+            check(lib.occseg_map_values(h, out.ctypes.data, out.size))
         return out
 
     def write(self, path, **options):
         """Writes the map with the library's writer for the path's extension (.npy: float32
         [z, y, x]; .nrrd: with voxel size and origin; more from plugins); keywords become writer
-        options "key=value". All or nothing."""
+        options "key=value". All or nothing. A path, option name or text value holding a NUL
+        character raises OccsegValueError (C would see only the text before it)."""
+        p = path_bytes("occseg.Map.write", "path", path)
         if has("occseg_map_write_options"):
-            check(lib.occseg_map_write_options(self.handle, os.fsencode(path), option_array("occseg_map_write", options)))
+            opts = option_array("occseg_map_write", options)
+            self._call(lambda h: check(lib.occseg_map_write_options(h, p, opts)))
         elif options:
             raise OccsegError(Status.EUNSUPPORTED, "occseg_map_write: options need a liboccseg with "
                                                    "occseg_map_write_options")
         else:
-            check(lib.occseg_map_write(self.handle, os.fsencode(path)))
+            self._call(lambda h: check(lib.occseg_map_write(h, p)))
 
     def segment(self, preset="default", threads=0, **kwargs):
         """Same as occseg.segment(self, ...)."""
@@ -128,9 +132,43 @@ class Map(Owned):
         return segment(self, preset, threads, **kwargs)
 
     def __repr__(self):
-        if self.closed:
+        try:
+            with self._used() as h:
+                return (f"<occseg.Map dims={map_dims(h)} voxel_size={map_voxel_size(h):g} "
+                        f"origin={map_origin(h)}>")
+        except ValueError:
             return "<occseg.Map closed>"
-        return f"<occseg.Map dims={self.dims} voxel_size={self.voxel_size:g} origin={self.origin}>"
+
+
+# The queries of a map, on a C pointer the caller holds a use of.
+def map_dims(h):
+    d = c_size3()
+    check(lib.occseg_map_dims(h, d))
+    return tuple(d)
+
+
+def map_voxel_size(h):
+    v = ctypes.c_double()
+    check(lib.occseg_map_voxel_size(h, ctypes.byref(v)))
+    return v.value
+
+
+def map_origin(h):
+    o = c_double3()
+    check(lib.occseg_map_origin(h, o))
+    return tuple(o)
+
+
+def _origin_arg(who, value):
+    """(x, y, z) floats from a sequence of three real numbers."""
+    try:
+        items = list(value)
+    except TypeError:
+        raise OccsegTypeError(Status.EINVAL, f"{who}: origin must be a sequence of 3 numbers, "
+                                             f"not {type(value).__name__}") from None
+    if len(items) != 3:
+        raise OccsegValueError(Status.EINVAL, f"{who}: origin has {len(items)} values; expected 3 (x, y, z)")
+    return tuple(real(who, f"origin[{k}]", v) for k, v in enumerate(items))
 
 
 def read_map(path, **options):
@@ -139,7 +177,7 @@ def read_map(path, **options):
     option "key=value" (e.g. voxel_size=0.05 for .npy; a reader refuses keys it does not know).
     A library older than the plugin interface reads .npy only, and takes voxel_size only."""
     out = ctypes.c_void_p()
-    p = os.fsencode(path)
+    p = path_bytes("occseg.read_map", "path", path)
     if has("occseg_map_read_options"):
         check(lib.occseg_map_read_options(ctypes.byref(out), p, option_array("occseg_map_read", options)))
         return Map(out)

@@ -3,7 +3,8 @@ import ctypes
 import dataclasses
 import numbers
 
-from ._errors import OccsegError, Status, check
+from ._args import real, text_bytes
+from ._errors import OccsegTypeError, Status, check
 from ._lib import has, lib
 from ._text import get_text
 
@@ -37,14 +38,17 @@ def param_table():
 
 def set_param(handle, name, value):
     """Sets one parameter: ints and floats (Python or NumPy) through the typed setters, text as
-    occseg_params_set parses it. Anything else (bool, bytes, None, ...) is refused, not guessed."""
-    key = name.encode()
+    occseg_params_set parses it. Anything else (bool, bytes, None, ...) is refused, not guessed;
+    so is a name or text holding a NUL character (OccsegValueError), which C would cut there."""
+    key = text_bytes("occseg.segment", "parameter name", name)
     if isinstance(value, bool) or not isinstance(value, (numbers.Real, str)):
-        raise OccsegError(Status.EINVAL, f"occseg.segment: parameter '{name}': {value!r} "
-                                         f"({type(value).__name__}) is not a number or text")
-    if isinstance(value, str) or isinstance(value, numbers.Integral) and not -2**63 <= value < 2**63:
+        raise OccsegTypeError(Status.EINVAL, f"occseg.segment: parameter '{name}': {value!r} "
+                                             f"({type(value).__name__}) is not a number or text")
+    if isinstance(value, str):
+        check(lib.occseg_params_set(handle, key, text_bytes("occseg.segment", f"parameter '{name}'", value)))
+    elif isinstance(value, numbers.Integral) and not -2**63 <= value < 2**63:
         check(lib.occseg_params_set(handle, key, str(value).encode()))  # the library names the bound
     elif isinstance(value, numbers.Integral):
         check(lib.occseg_params_set_int(handle, key, int(value)))
     else:
-        check(lib.occseg_params_set_double(handle, key, float(value)))
+        check(lib.occseg_params_set_double(handle, key, real("occseg.segment", f"parameter '{name}'", value)))

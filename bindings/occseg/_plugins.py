@@ -1,9 +1,9 @@
 """The plugin registry of liboccseg (occseg_plugins_load and friends), for libraries that have it."""
 import ctypes
 import dataclasses
-import os
 
-from ._errors import OccsegError, Status, check
+from ._args import path_bytes
+from ._errors import OccsegError, OccsegTypeError, Status, check
 from . import _lib
 from ._lib import has, lib
 from ._text import get_text
@@ -40,9 +40,10 @@ def _require(name):
 def load_plugin(path):
     """Loads one plugin file (occseg_plugins_load); its stages, readers, writers and parameters
     become available to segment(), read_map() and Map.write() in the whole process. Plugins are
-    never unloaded. OccsegError EPLUGIN names the file and the reason when it cannot be loaded."""
+    never unloaded. OccsegError EPLUGIN names the file and the reason when it cannot be loaded; a
+    path holding a NUL character raises OccsegValueError (C would load the file before it)."""
     _require("occseg_plugins_load")
-    check(lib.occseg_plugins_load(os.fsencode(path)))
+    check(lib.occseg_plugins_load(path_bytes("occseg.load_plugin", "path", path)))
 
 
 def load_default_plugins():
@@ -76,6 +77,8 @@ def plugins():
 def stages(kind):
     """The registered stages of one kind: "texture", "similarity", "reader" or "writer"."""
     _require("occseg_stage_count")
+    if not isinstance(kind, str):
+        raise OccsegTypeError(Status.EINVAL, f"stages: kind must be a str, not {type(kind).__name__}")
     if kind not in STAGE_KINDS:
         raise OccsegError(Status.EINVAL, f"stages: kind {kind!r} is not one of {', '.join(STAGE_KINDS)}")
     k = STAGE_KINDS[kind]

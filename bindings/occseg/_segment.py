@@ -1,26 +1,26 @@
 """occseg.segment(): one call from a NumPy array (or a Map) to a Result."""
+import contextlib
 import ctypes
 
+from ._args import text_bytes
 from ._context import Context
 from ._errors import OccsegError, Status, check
-from ._handles import own
+from ._handles import Owned
 from ._lib import PROGRESS_FN, lib
-from ._map import Map, as_voxel_array
+from ._map import Map, as_voxel_array, map_dims, map_origin, map_voxel_size
 from ._params import set_param
 from ._result import Result
 
 
-class _Params:
-    """An occseg_params handle that lives for one call."""
+class _Params(Owned):
+    """An occseg_params handle that lives for one call (owned like every other handle)."""
+
+    _what = "occseg parameter set"
 
     def __init__(self):
         out = ctypes.c_void_p()
         check(lib.occseg_params_create(ctypes.byref(out)))
-        self.handle = out.value
-        self._finalizer = own(self, "params", lib.occseg_params_free, self.handle)
-
-    def close(self):
-        self._finalizer()
+        self._own(out, "params", lib.occseg_params_free)
 
 
 class _Progress:
@@ -59,13 +59,20 @@ def segment(probabilities, preset="default", threads=0, *, voxel_size=None, orig
         same result, without starting threads on every call.
     **params: any parameter of occseg.param_table(), e.g. smax=32, split_ratio=1.2.
 
-    Returns a Result. Raises OccsegError for bad input, naming the problem."""
+    Returns a Result. Raises OccsegError for bad input, naming the problem.
+
+    A Map or context closed while this runs (by another thread, or by `progress`) is freed only
+    once the C call has returned; this call finishes normally."""
+    who = "occseg.segment"
+    preset_text = text_bytes(who, "preset", preset)
+    if context is not None and not isinstance(context, Context):
+        raise OccsegError(Status.EINVAL, f"{who}: context must be an occseg.Context, not {type(context).__name__}")
     if isinstance(probabilities, Map):
         if voxel_size is not None or origin is not None or clamp or nan_unknown:
             raise OccsegError(Status.EINVAL, "occseg.segment: voxel_size, origin, clamp and nan_unknown apply to "
                                              "arrays; a Map carries its own voxel size and origin")
         m, temporary = probabilities, False
-        shape = m.shape
+        shape = None  # the map's, read under the use below
     else:
         arr = as_voxel_array(probabilities, "occseg.segment")
         m = Map.from_array(arr, 1.0 if voxel_size is None else voxel_size, origin,
@@ -75,25 +82,30 @@ def segment(probabilities, preset="default", threads=0, *, voxel_size=None, orig
     p = None
     try:
         p = _Params()
-        check(lib.occseg_params_preset(p.handle, str(preset).encode()))
-        set_param(p.handle, "threads", threads)
-        for name, value in params.items():
-            set_param(p.handle, name, value)
         cb = _Progress(progress)
-        check(lib.occseg_params_set_progress(p.handle, cb.c_fn, None))
-        out = ctypes.c_void_p()
-        if context is None:
-            rc = lib.occseg_segment(ctypes.byref(out), m.handle, p.handle)
-        else:
-            if not isinstance(context, Context):
-                raise OccsegError(Status.EINVAL, "occseg.segment: context must be an occseg.Context, not "
-                                                 f"{type(context).__name__}")
-            rc = lib.occseg_context_segment(ctypes.byref(out), context.handle, m.handle, p.handle)
+        with p._used() as ph:
+            check(lib.occseg_params_preset(ph, preset_text))
+            set_param(ph, "threads", threads)
+            for name, value in params.items():
+                set_param(ph, name, value)
+            check(lib.occseg_params_set_progress(ph, cb.c_fn, None))
+            # Uses of the map and the context span the C call: a close() meanwhile (another
+            # thread's, or the progress callback's) frees them only once the call has returned.
+            with m._used() as mh, (context._used() if context is not None else contextlib.nullcontext()) as ch:
+                voxel_size, origin = map_voxel_size(mh), map_origin(mh)
+                if shape is None:
+                    shape = tuple(reversed(map_dims(mh)))
+                out = ctypes.c_void_p()
+                if context is None:
+                    rc = lib.occseg_segment(ctypes.byref(out), mh, ph)
+                else:
+                    rc = lib.occseg_context_segment(ctypes.byref(out), ch, mh, ph)
+                if cb.error is None:
+                    check(rc)  # here: the deferred frees at the end of the uses come after the text is read
         if cb.error is not None:
             lib.occseg_result_free(out)  # NULL after a cancel; freed anyway should it ever not be
             raise cb.error
-        check(rc)
-        return Result(out, shape, m.voxel_size, m.origin)
+        return Result(out, shape, voxel_size, origin)
     finally:
         if p is not None:
             p.close()

@@ -2,6 +2,7 @@
 import ctypes
 import numbers
 
+from ._args import text_bytes
 from ._errors import OccsegError, Status, check
 
 
@@ -26,16 +27,18 @@ def _number(who, key, value):
 def option_array(who, options):
     """A NULL-terminated const char *[] of "key=value" texts (or None for no options). A value is
     text, a number (floats in their shortest exact form) or a sequence of numbers, joined by
-    commas as the library's readers expect (bbox=(x0, y0, z0, x1, y1, z1))."""
+    commas as the library's readers expect (bbox=(x0, y0, z0, x1, y1, z1)). A name or text
+    holding a NUL character is refused (OccsegValueError): C would read only the text before it."""
     if not options:
         return None
     texts = []
     for key, value in options.items():
+        k = text_bytes(who, "option name", key)
         if isinstance(value, str):
-            text = value
+            text = text_bytes(who, f"option '{key}'", value)
         elif isinstance(value, (list, tuple)) or (hasattr(value, "ndim") and getattr(value, "ndim") == 1):
-            text = ",".join(_number(who, key, v) for v in value)
+            text = ",".join(_number(who, key, v) for v in value).encode()
         else:
-            text = _number(who, key, value)
-        texts.append(f"{key}={text}".encode())
+            text = _number(who, key, value).encode()
+        texts.append(k + b"=" + text)
     return (ctypes.c_char_p * (len(texts) + 1))(*texts, None)

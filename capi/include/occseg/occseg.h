@@ -26,6 +26,9 @@
  *     the parameters at its start, so the object may be changed or freed once it has returned.
  *   - occseg_last_error() is per thread: it describes the last failing call of the calling thread.
  *   - The progress callback is called on the thread that called occseg_segment().
+ *   - No handle may be freed (or a result recycled) while a call uses it: not from another
+ *     thread, and not from inside the progress callback of an occseg_segment() or
+ *     occseg_context_segment() that uses that map or context; the call would read freed memory.
  *   - Threads writing the same path at once (occseg_map_write, occseg_result_write) each write
  *     a complete file, never a mixture, but which one remains is unspecified, and the two files
  *     of occseg_result_write may then come from different results.
