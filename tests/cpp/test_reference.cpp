@@ -9,6 +9,7 @@
 
 #include "rules/departures.hpp"
 #include "stages/histogram.hpp"
+#include "stages/label.hpp"
 #include "stages/refine.hpp"
 #include "occseg/segment.hpp"
 #include "stages/texture.hpp"
@@ -18,6 +19,9 @@
 #include "reference/reference.hpp"
 
 using namespace occseg;
+
+// The reference sums segment statistics in the library's documented slabs.
+static_assert(reference::kSlab == kLabelSlab);
 
 namespace {
 

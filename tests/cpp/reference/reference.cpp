@@ -6,13 +6,71 @@
 #include <limits>
 #include <memory>
 
-#include "stages/refine.hpp"
-
 namespace occseg::reference {
 
 namespace {
 
 constexpr std::uint8_t kFree = 0, kUnknown = 1, kOccupied = 2;
+
+// Section 3.3's six scans, in the order the library documents: left-right, right-left along x,
+// then y, then z.
+struct ScanDirection {
+  int axis;  // 0, 1, 2: x, y, z
+  int step;  // +1 or -1
+};
+constexpr ScanDirection kSixDirections[6] = {{0, +1}, {0, -1}, {1, +1}, {1, -1}, {2, +1}, {2, -1}};
+
+// Section 2.2's texture unit of one voxel: neighbours >= the centre are 1 (bit i of the LBP for
+// neighbour i: x-1, x+1, y-1, y+1, z-1, z+1), the contrast is mean(1s) - mean(0s), 0 when one
+// side is empty. Neighbours outside `present` (an axis of size 1) take no part.
+struct Unit {
+  std::uint8_t lbp = 0;
+  double contrast = 0;
+};
+Unit texture_unit(double centre, const double n[6], unsigned present) {
+  Unit u;
+  double ones = 0, zeros = 0;
+  int n1 = 0, n0 = 0;
+  for (int i = 0; i < 6; ++i) {
+    if (!(present >> i & 1u)) continue;
+    if (n[i] >= centre) {
+      u.lbp = static_cast<std::uint8_t>(u.lbp + (1u << i));
+      ones += n[i];
+      ++n1;
+    } else {
+      zeros += n[i];
+      ++n0;
+    }
+  }
+  if (n1 > 0 && n0 > 0) u.contrast = ones / n1 - zeros / n0;
+  return u;
+}
+
+// The contrast levels (docs/algorithm.md): level 0 is C = 0; the non-zero contrasts, measured in
+// steps of 1/4096 (clamped to [0, 4095]), are split into bins - 1 classes of equal frequency: the
+// k-th cut is the first step whose cumulative count reaches k / (bins - 1) of the total, and a
+// step's level is 1 plus the number of cuts below it.
+constexpr int kSteps = 4096;
+int step_of(double c) { return std::min(kSteps - 1, std::max(0, static_cast<int>(c * kSteps))); }
+std::vector<int> level_of_steps(const std::vector<std::uint64_t>& count, int bins) {
+  const std::uint64_t total = [&] {
+    std::uint64_t t = 0;
+    for (auto c : count) t += c;
+    return t;
+  }();
+  const std::uint64_t classes = static_cast<std::uint64_t>(bins - 1);
+  std::vector<int> cuts;
+  for (std::uint64_t k = 1; k < classes && total > 0; ++k) {
+    std::uint64_t cum = 0;
+    int f = 0;
+    while (f < kSteps && (cum += count[f]) * classes < total * k) ++f;
+    if (f < kSteps) cuts.push_back(f);
+  }
+  std::vector<int> level(kSteps, 1);
+  for (int f = 0; f < kSteps; ++f)
+    for (int c : cuts) level[f] += c < f;
+  return level;
+}
 
 template <class F>
 void for_each_unit(const Grid& g, F&& f) {
@@ -35,7 +93,7 @@ void for_each_unit(const Grid& g, F&& f) {
         if (!fx) { nb[0] = p[i - 1]; nb[1] = p[i + 1]; }
         if (!fy) { nb[2] = p[i - sy]; nb[3] = p[i + sy]; }
         if (!fz) { nb[4] = p[i - sz]; nb[5] = p[i + sz]; }
-        const TextureUnit u = texture_unit(p[i], nb, present);
+        const Unit u = texture_unit(p[i], nb, present);
         f(i, &u);
       }
     }
@@ -206,16 +264,17 @@ inline void unite(std::uint32_t* parent, std::uint32_t a, std::uint32_t b) {
 }  // namespace
 
 TextureMap texture(const Grid& grid, int bins) {
-  std::vector<std::uint64_t> fine(ContrastQuantizer::kFine, 0);
-  for_each_unit(grid, [&](std::size_t, const TextureUnit* u) {
-    if (u && u->contrast > 0) ++fine[ContrastQuantizer::fine_step(u->contrast)];
+  std::vector<std::uint64_t> fine(kSteps, 0);
+  for_each_unit(grid, [&](std::size_t, const Unit* u) {
+    if (u && u->contrast > 0) ++fine[step_of(u->contrast)];
   });
-  const ContrastQuantizer q(bins, fine);
+  const std::vector<int> level = level_of_steps(fine, bins);
   TextureMap tm;
   tm.bins = bins;
   tm.codes.resize(grid.dims.count());
-  for_each_unit(grid, [&](std::size_t i, const TextureUnit* u) {
-    tm.codes[i] = u ? static_cast<std::uint16_t>(u->lbp * bins + q.level(u->contrast)) : kNoTexture;
+  for_each_unit(grid, [&](std::size_t i, const Unit* u) {
+    const int c = !u || u->contrast <= 0 ? 0 : level[step_of(u->contrast)];
+    tm.codes[i] = u ? static_cast<std::uint16_t>(u->lbp * bins + c) : kNoTexture;
   });
   return tm;
 }
@@ -425,11 +484,11 @@ void label(const std::vector<std::uint8_t>& st, const Grid& g, LabelArray& label
   }
   // Mean occupancy: each run (a maximal stretch of one label along x) summed in eight lanes
   // (voxel k of the run into lane k % 8, lanes added as ((l0 + l1) + (l2 + l3)) + ((l4 + l5) +
-  // (l6 + l7))), the runs added in scan order within each slab of kLabelSlab z-planes, the slab
+  // (l6 + l7))), the runs added in scan order within each slab of kSlab z-planes, the slab
   // sums in slab order (the documented order of label_components()).
   std::vector<double> part(segments.size(), 0.0);
   for (std::size_t z = 0, i = 0; z < g.dims.nz; ++z) {
-    if (z % kLabelSlab == 0) std::fill(part.begin(), part.end(), 0.0);
+    if (z % kSlab == 0) std::fill(part.begin(), part.end(), 0.0);
     for (std::size_t y = 0; y < ny; ++y) {
       double lane[8] = {};
       std::size_t k = 0;  // position in the current run
@@ -452,7 +511,7 @@ void label(const std::vector<std::uint8_t>& st, const Grid& g, LabelArray& label
         }
       }
     }
-    if (z % kLabelSlab == kLabelSlab - 1 || z + 1 == g.dims.nz)
+    if (z % kSlab == kSlab - 1 || z + 1 == g.dims.nz)
       for (std::size_t k = 0; k < segments.size(); ++k) segments[k].mop += part[k];
   }
   for (auto& s : segments) {

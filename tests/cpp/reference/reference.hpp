@@ -1,19 +1,23 @@
 // A slow, scalar, single-threaded reference of the whole pipeline: the straightforward loops the
 // fast stages in libseg/src/ replaced (voxel by voxel, line by line, union-find labelling). The
 // tests compare the fast pipeline against it bit for bit on random maps (test_reference.cpp).
+// It shares no code with the library: only the public types (Grid, Params, Block, Segment,
+// TextureMap) and the documented orders of its sums (docs/algorithm.md).
 #pragma once
 #include <cstdint>
 #include <vector>
 
-#include "stages/label.hpp"
-#include "stages/divide.hpp"
 #include "occseg/grid.hpp"
 #include "occseg/params.hpp"
-#include "stages/texture.hpp"
+#include "occseg/result.hpp"
+#include "occseg/texture_codes.hpp"
 
 namespace occseg::reference {
 
-// Texture codes of every voxel, computed one texture_unit() at a time.
+// z-planes per labelling slab: the documented order of the segment sums (label_components()).
+constexpr std::size_t kSlab = 8;
+
+// Texture codes of every voxel, computed one texture unit (section 2.2) at a time.
 TextureMap texture(const Grid& grid, int contrast_bins);
 // The G-statistic in the library's documented summation order (docs/algorithm.md, section 2).
 double g_statistic(const std::uint32_t* s, const std::uint32_t* m, std::size_t bins);
