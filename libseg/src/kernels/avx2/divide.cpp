@@ -66,7 +66,8 @@ __attribute__((target("avx2,popcnt"))) std::size_t list_nonzero(const std::uint3
                                                                 std::size_t n, std::uint32_t* out) {
   std::size_t m = 0, i = 0;
   const __m256i zero = _mm256_setzero_si256();
-  for (; i + 8 <= n; i += 8) {
+  const std::size_t whole = n & ~std::size_t(7);  // (then the tail one by one)
+  for (; i < whole; i += 8) {
     __m256i v = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(a + i));
     if (Two) v = _mm256_add_epi32(v, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(b + i)));
     const unsigned k =

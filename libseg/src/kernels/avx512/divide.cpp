@@ -84,7 +84,8 @@ template <bool Two>
 __attribute__((target("avx512f,popcnt"))) std::size_t list_nonzero(const std::uint32_t* a, const std::uint32_t* b,
                                                                   std::size_t n, std::uint32_t* out) {
   std::size_t m = 0, i = 0;
-  for (; i + 16 <= n; i += 16) {
+  const std::size_t whole = n & ~std::size_t(15);  // (then the tail one by one)
+  for (; i < whole; i += 16) {
     __m512i v = _mm512_loadu_si512(a + i);
     if (Two) v = _mm512_add_epi32(v, _mm512_loadu_si512(b + i));
     const __mmask16 k = _mm512_test_epi32_mask(v, v);

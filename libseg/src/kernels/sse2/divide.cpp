@@ -97,7 +97,8 @@ template <bool Two>
 std::size_t list_nonzero(const std::uint32_t* a, const std::uint32_t* b, std::size_t n, std::uint32_t* out) {
   std::size_t m = 0, i = 0;
   alignas(16) std::uint32_t sum[16];
-  for (; i + 16 <= n; i += 16) {
+  const std::size_t whole = n & ~std::size_t(15);  // (then the tail one by one)
+  for (; i < whole; i += 16) {
     const std::uint32_t* v = a + i;
     if (Two) {
       for (int k = 0; k < 16; k += 4)
