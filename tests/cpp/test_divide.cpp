@@ -2,6 +2,9 @@
 
 #include <algorithm>
 
+#include "isa_levels.hpp"
+#include "random_maps.hpp"
+#include "stages/codes.hpp"
 #include "stages/divide.hpp"
 #include "stages/histogram.hpp"
 
@@ -88,9 +91,9 @@ TEST(Divide, CountCodesMatchesOneByOneCounting) {
   // Codes in runs: whole rows of one code (the eight-at-once path), rows with one voxel
   // different at each position, kNoTexture runs and single kNoTexture voxels; blocks at every
   // offset and width, so rows of 8 start anywhere and leave tails of 1..7, and of 1 to 8 rows
-  // (blocks 8 wide go four rows at a time where they can, then two, then one). Every counting kernel
-  // the processor has (they follow the texture kernel setting); the packed ones take the block's
-  // first code as the common one, kNoTexture included.
+  // (blocks 8 wide go four rows at a time where they can, then two, then one). The counting kernel
+  // of every level the processor has; the packing ones take the block's first code as the common
+  // one, kNoTexture included.
   const Dims d{37, 9, 4};
   TextureMap t;
   t.bins = 8;
@@ -105,8 +108,7 @@ TEST(Divide, CountCodesMatchesOneByOneCounting) {
   }
   for (std::uint32_t x = 0; x < 12; x += 3) t.codes[x + d.nx] = kNoTexture;  // blocks whose first voxel has none
   std::size_t checked = 0, uniform_rows = 0, first_without_texture = 0;
-  for (int kernel = 0; kernel <= static_cast<int>(detail::TextureKernel::fastest); ++kernel) {
-    detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
+  testing_isa::for_each_isa([&](kernels::Isa) {
     for (std::uint32_t x0 = 0; x0 < 12; ++x0)
       for (std::uint32_t w = 1; x0 + w <= d.nx; w += w < 9 ? 1 : 5)  // 8: the four-row path
         for (std::uint32_t rows = 1; rows <= 8; ++rows) {
@@ -119,16 +121,82 @@ TEST(Divide, CountCodesMatchesOneByOneCounting) {
                 const std::uint16_t c = t.codes[x + d.nx * (y + d.ny * z)];
                 if (c != kNoTexture) ++want[c];
               }
-          ASSERT_EQ(got, want) << "kernel " << kernel << " block x " << x0 << " width " << w << " rows " << rows;
+          ASSERT_EQ(got, want) << "block x " << x0 << " width " << w << " rows " << rows;
           ++checked;
           first_without_texture += t.codes[x0 + d.nx] == kNoTexture;
         }
-  }
-  detail::set_texture_kernel(detail::TextureKernel::fastest);
+  });
   EXPECT_GT(first_without_texture, 10u);
   // The map really has rows of eight equal codes, with and without texture.
   for (std::size_t i = 0; i + 8 <= t.codes.size(); ++i)
     uniform_rows += std::all_of(t.codes.begin() + i, t.codes.begin() + i + 8, [&](auto c) { return c == t.codes[i]; });
   EXPECT_GT(uniform_rows, 50u);
   EXPECT_GT(checked, 1000u);
+}
+
+// Eq. (2) stopping at the first pairs that say "split" gives the answer of all 28 pairs: on
+// random statistics with ties, zeros and ratios at X, in every position of the pair order.
+TEST(Divide, SplitRuleStopsEarlyWithTheAnswerOfEveryPair) {
+  test::Rng r(9);
+  std::size_t early = 0, splits = 0, trials = 0;
+  for (std::size_t n = 0; n <= 8; ++n)
+    for (int trial = 0; trial < 400; ++trial) {
+      double g[8][8];
+      for (auto& row : g)
+        for (double& v : row) {
+          const int kind = r.below(8);
+          v = kind == 0 ? 0.0 : kind == 1 ? 1.0 : kind == 2 ? 1.2 : 1.0 + r.uniform();
+        }
+      std::size_t asked = 0, asked_all = 0;
+      const bool stop = split_by_ratio(n, 1.2, [&](std::size_t a, std::size_t b) { return ++asked, g[a][b]; });
+      const bool all = split_by_ratio(
+          n, 1.2, [&](std::size_t a, std::size_t b) { return ++asked_all, g[a][b]; }, /*every_pair=*/true);
+      // Written out: Gmax and Gmin over every pair.
+      double gmax = 0, gmin = HUGE_VAL;
+      for (std::size_t a = 0; a < n; ++a)
+        for (std::size_t b = a + 1; b < n; ++b) gmax = std::max(gmax, g[a][b]), gmin = std::min(gmin, g[a][b]);
+      const bool want = n >= 2 && gmax > 0 && (gmin == 0 || gmax / gmin > 1.2);
+      ASSERT_EQ(all, want) << "n " << n << " trial " << trial;
+      ASSERT_EQ(stop, want) << "n " << n << " trial " << trial;
+      ASSERT_EQ(asked_all, n < 2 ? 0 : n * (n - 1) / 2);
+      early += asked < asked_all;
+      splits += want;
+      ++trials;
+    }
+  EXPECT_GT(early, trials / 4);
+  EXPECT_GT(splits, trials / 4);
+  EXPECT_LT(splits, trials);
+}
+
+// The division with every level's kernels gives the scalar level's leaves: through the octree of
+// histograms (defaults), through the counting of each examined block (Smin 4: too many bins for
+// its voxels; a plugin similarity), with the built-in operator's codes (faces_only) and others.
+TEST(Divide, EveryLevelGivesTheLeavesOfTheScalarKernels) {
+  std::size_t leaves = 0;
+  for (const std::uint64_t seed : {1, 2, 3}) {
+    const Grid g = test::random_map(Dims{75 + 20 * seed, 70, 41}, seed, 0.4);
+    const TextureMap t = compute_texture(g, 8, 1);
+    Params variants[3] = {Params::defaults(), Params::paper(), Params::defaults()};
+    variants[1].smin = 4;
+    variants[2].similarity = "chi2";
+    for (Params& p : variants)
+      for (const bool faces_only : {true, false}) {
+        const auto* codes = reinterpret_cast<const detail::code_t*>(t.codes.data());
+        p.threads = 2;
+        const auto want =
+            detail::divide_codes(g, codes, t.code_count(), p, faces_only, kernels::table(kernels::Isa::scalar));
+        leaves += want.size();
+        const int levels = testing_isa::for_each_isa([&](kernels::Isa level) {
+          const auto got = detail::divide_codes(g, codes, t.code_count(), p, faces_only, kernels::table(level));
+          ASSERT_EQ(got.size(), want.size()) << "seed " << seed << " smin " << p.smin << " " << p.similarity;
+          for (std::size_t i = 0; i < got.size(); ++i)
+            for (int a = 0; a < 3; ++a) {
+              ASSERT_EQ(got[i].lo[a], want[i].lo[a]) << "seed " << seed << " leaf " << i;
+              ASSERT_EQ(got[i].hi[a], want[i].hi[a]) << "seed " << seed << " leaf " << i;
+            }
+        });
+        EXPECT_GE(levels, 2);
+      }
+  }
+  EXPECT_GT(leaves, 2000u);  // maps that really split
 }

@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "rules/departures.hpp"
+#include "stages/divide.hpp"
 #include "stages/histogram.hpp"
 #include "stages/label.hpp"
 #include "stages/refine.hpp"
@@ -17,6 +18,7 @@
 #include "stages/own_states.hpp"
 #include "random_maps.hpp"
 #include "reference/reference.hpp"
+#include "isa_levels.hpp"
 
 using namespace occseg;
 
@@ -171,7 +173,7 @@ TEST(Reference, RowsOccupiedOnlyInTheirLastCellAreSwept) {
 
 // The built-in operator's codes through the division as segment() runs it (faces_only: blocks
 // inside the map counted without the kNoTexture test, the flat code as the common one), with
-// every counting kernel the processor has (they follow the texture kernel setting).
+// the division's kernels of every level the processor has.
 TEST(Reference, DivisionMatchesWithEveryCountingKernel) {
   std::size_t with_flat = 0, without_flat = 0;
   for (const Case& c : kCases) {
@@ -182,16 +184,15 @@ TEST(Reference, DivisionMatchesWithEveryCountingKernel) {
     without_flat += flat == 0;
     for (Params p : {Params::paper(), Params::defaults()}) {
       const std::vector<Block> want = reference::divide(g, t, p);
-      for (int kernel = 0; kernel <= static_cast<int>(detail::TextureKernel::fastest); ++kernel) {
-        detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
+      const int levels = testing_isa::for_each_isa([&](kernels::Isa level) {
         for (int threads : {1, 2}) {
           p.threads = threads;
           const auto got = detail::divide_codes(g, reinterpret_cast<const detail::code_t*>(t.codes.data()),
-                                                t.code_count(), p, /*faces_only=*/true);
-          EXPECT_TRUE(same_blocks(got, want)) << "seed " << c.seed << " kernel " << kernel << " threads " << threads;
+                                                t.code_count(), p, /*faces_only=*/true, kernels::table(level));
+          EXPECT_TRUE(same_blocks(got, want)) << "seed " << c.seed << " threads " << threads;
         }
-      }
-      detail::set_texture_kernel(detail::TextureKernel::fastest);
+      });
+      EXPECT_GE(levels, 2);
     }
   }
   // Maps where the flat (common) code is a tenth of the voxels or more (unknown boxes at exactly
@@ -204,7 +205,7 @@ TEST(Reference, DivisionMatchesWithEveryCountingKernel) {
 // siblings taken: one 16^3 block of eight 8^3 octants with random histograms over 40 codes spread
 // over the 512 bins (each sum fills its eight lanes several times), X set to the reference's
 // Gmax / Gmin over the 28 pairs and to the next double below it. The block must stay whole at X
-// and split below it, on every counting kernel: a G one rounding off, or a pair left out (each of
+// and split below it, with the kernels of every level: a G one rounding off, or a pair left out (each of
 // the 28 pairs is the largest or the smallest in some of the blocks), moves the ratio across one
 // of the two.
 TEST(Reference, DivisionRatioIsExactAtTheThreshold) {
@@ -253,15 +254,18 @@ TEST(Reference, DivisionRatioIsExactAtTheThreshold) {
     ASSERT_GT(gmin, 0.0);
     extreme[max_pair[0]][max_pair[1]] = extreme[min_pair[0]][min_pair[1]] = true;
     const double ratio = gmax / gmin;
-    for (int kernel = 0; kernel <= static_cast<int>(detail::TextureKernel::fastest); ++kernel) {
-      detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
+    // The rule itself (should_split over g_statistic), then the division on every level.
+    const std::vector<const std::uint32_t*> octants = {h[0].data(), h[1].data(), h[2].data(), h[3].data(),
+                                                       h[4].data(), h[5].data(), h[6].data(), h[7].data()};
+    EXPECT_FALSE(should_split(octants, 512, ratio)) << "trial " << trial;
+    EXPECT_TRUE(should_split(octants, 512, std::nextafter(ratio, 0.0))) << "trial " << trial;
+    testing_isa::for_each_isa([&](kernels::Isa level) {
       for (const double x : {ratio, std::nextafter(ratio, 0.0)}) {
         p.split_ratio = x;
-        const auto got = detail::divide_codes(g, codes.data(), 512, p, /*faces_only=*/false);
-        EXPECT_EQ(got.size(), x == ratio ? 1u : 8u) << "trial " << trial << " kernel " << kernel << " X " << x;
+        const auto got = detail::divide_codes(g, codes.data(), 512, p, /*faces_only=*/false, kernels::table(level));
+        EXPECT_EQ(got.size(), x == ratio ? 1u : 8u) << "trial " << trial << " X " << x;
       }
-    }
-    detail::set_texture_kernel(detail::TextureKernel::fastest);
+    });
   }
   for (int b = 1; b < 8; ++b)
     for (int a = 0; a < b; ++a) EXPECT_TRUE(extreme[a][b]) << "pair " << a << ", " << b << " never decided the ratio";

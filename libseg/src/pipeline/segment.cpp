@@ -179,11 +179,11 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
     const int codes = op->native_into(grid, params, reinterpret_cast<std::uint16_t*>(bytes), bytes + 2 * n, &*rows);
     st.begin("division");
     blocks = detail::divide_codes(grid, reinterpret_cast<const detail::code_t*>(r.labels.data()), codes, params,
-                                  /*faces_only=*/true);
+                                  /*faces_only=*/true, k);
   } else {  // a plugin's codes come in their own array: the label array waits for it to go
     TextureMap tex = run_texture(grid, params);
     st.begin("division");
-    blocks = divide(grid, tex, params);
+    blocks = divide(grid, tex, params, k);
     tex = TextureMap();
     release_freed_memory();
     resize_huge(r.labels, n);

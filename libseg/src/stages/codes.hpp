@@ -29,6 +29,6 @@ void compute_texture_into(const Grid& grid, int contrast_bins, int threads, code
 // faces_only: kNoTexture codes lie only on the map's outer faces (the built-in operator's codes;
 // a plugin may leave any voxel without texture), so blocks inside are counted without a test.
 std::vector<Block> divide_codes(const Grid& grid, const code_t* codes, int code_count, const Params& params,
-                                bool faces_only);
+                                bool faces_only, const kernels::Table& k);
 
 }  // namespace occseg::detail

@@ -11,7 +11,7 @@
 #include "kernels/cpu_features.hpp"
 #include "stages/codes.hpp"
 #include "util/huge_pages.hpp"
-#include "kernels/lane_pack.hpp"
+#include "kernels/avx2/lane_pack.hpp"
 #include "stages/own_states.hpp"
 #include "util/thread_scratch.hpp"
 
