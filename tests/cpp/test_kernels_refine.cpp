@@ -41,7 +41,9 @@ std::vector<std::uint64_t> bits(test::Rng& r, std::size_t n, double density) {
   return w;
 }
 
-const detail::word_t* words(const std::vector<std::uint64_t>& v) { return reinterpret_cast<const detail::word_t*>(v.data()); }
+const detail::word_t* words(const std::vector<std::uint64_t>& v) {
+  return reinterpret_cast<const detail::word_t*>(v.data());
+}
 detail::word_t* words(std::vector<std::uint64_t>& v) { return reinterpret_cast<detail::word_t*>(v.data()); }
 
 }  // namespace
@@ -125,7 +127,8 @@ TEST(KernelsRefine, WindowStarts) {
           auto want_skip = skip;
           std::vector<std::uint32_t> lanes(nx + 1, 0xDEADBEEF), want(nx + 1, 0xDEADBEEF);
           const std::size_t n = k.window_starts(prev.data(), cur.data(), skip.data(), nx, lanes.data());
-          const std::size_t m = scalar_kernels().window_starts(prev.data(), cur.data(), want_skip.data(), nx, want.data());
+          const std::size_t m =
+              scalar_kernels().window_starts(prev.data(), cur.data(), want_skip.data(), nx, want.data());
           ASSERT_EQ(n, m) << nx;
           ASSERT_EQ(lanes, want) << nx;
           ASSERT_EQ(skip, want_skip) << nx;

@@ -33,7 +33,9 @@ std::vector<std::uint64_t> bits(test::Rng& r, std::size_t n, double density, boo
   return w;
 }
 
-const detail::word_t* words(const std::vector<std::uint64_t>& v) { return reinterpret_cast<const detail::word_t*>(v.data()); }
+const detail::word_t* words(const std::vector<std::uint64_t>& v) {
+  return reinterpret_cast<const detail::word_t*>(v.data());
+}
 
 bool bit(const std::vector<std::uint64_t>& v, std::size_t x) { return (v[x / 64] >> (x % 64)) & 1u; }
 

@@ -68,12 +68,13 @@ void reassign_window(const std::uint8_t* own, int n, std::uint8_t from, bool* mo
   for (int k = 0; k < n; ++k) moves[k] = for_from && (!for_into || own[k] != into);
 }
 
-// reassign_window() on a window of the own states' bits, voxel k at pos(k) = (word index, bit).
-// The occupied bits come first: where they show no voxel on `from`'s side (entering an object
-// whose voxels are all occupied, or leaving one into space with none), the window is case (i) or
-// (ii) whatever its unknown bits, and they are not read. That decides most windows.
+// reassign_window() on a window of the own states' bits, voxel k at pos(k) = (word index, bit);
+// false when nothing moves (moves[] then unwritten). The occupied bits come first: where they
+// show no voxel on `from`'s side (entering an object whose voxels are all occupied, or leaving one
+// into space with none), the window is case (i) or (ii) whatever its unknown bits, and they are
+// not read. That decides most windows.
 template <class Pos>
-void reassign_window(const OwnBits& own, int n, std::uint8_t from, bool* moves, Pos&& pos) {
+bool reassign_window(const OwnBits& own, int n, std::uint8_t from, bool* moves, Pos&& pos) {
   std::uint8_t occupied[kMaxLook];
   bool any = false, all = true;
   for (int k = 0; k < n; ++k) {
@@ -82,16 +83,14 @@ void reassign_window(const OwnBits& own, int n, std::uint8_t from, bool* moves, 
     any = any || occupied[k];
     all = all && occupied[k];
   }
-  if (from == kFree ? all : !any) {
-    std::fill(moves, moves + n, false);
-    return;
-  }
+  if (from == kFree ? all : !any) return false;
   std::uint8_t win[kMaxLook];
   for (int k = 0; k < n; ++k) {
     const auto [i, b] = pos(k);
     win[k] = occupied[k] ? kOccupied : static_cast<std::uint8_t>((own.unknown[i] >> b) & 1u);  // (kUnknown is 1)
   }
   reassign_window(win, n, from, moves);
+  return true;
 }
 
 // ---- Scans along x: one row at a time ----
@@ -109,11 +108,11 @@ void scan_row(std::uint8_t* st, const OwnBits& own, std::size_t r, std::size_t l
     std::uint8_t* c = first + static_cast<std::ptrdiff_t>(q) * stride;
     const std::uint8_t from = c[-stride];
     const int n = window_length(c, stride, len - q, look);
-    reassign_window(own, n, from, moves, [&](int w) {
+    const bool some = reassign_window(own, n, from, moves, [&](int w) {
       const std::size_t p = q + static_cast<std::size_t>(w), x = step > 0 ? p : len - 1 - p;
       return std::pair<std::size_t, unsigned>(r * own.words + x / 64, static_cast<unsigned>(x % 64));
     });
-    for (int w = 0; w < n; ++w)
+    for (int w = 0; some && w < n; ++w)
       if (moves[w]) c[w * stride] = from;
     q += static_cast<std::size_t>(n);  // resume after the window
   }
@@ -147,10 +146,10 @@ inline std::uint8_t plane_window(std::uint8_t* cur, const OwnBits& own, std::siz
   const std::size_t i0 = orow * own.words + x / 64;
   const std::ptrdiff_t di = ors * static_cast<std::ptrdiff_t>(own.words);
   const auto b = static_cast<unsigned>(x % 64);
-  reassign_window(own, n, from, moves, [&](int w) {
+  const bool some = reassign_window(own, n, from, moves, [&](int w) {
     return std::pair<std::size_t, unsigned>(static_cast<std::size_t>(static_cast<std::ptrdiff_t>(i0) + w * di), b);
   });
-  for (int w = 0; w < n; ++w)
+  for (int w = 0; some && w < n; ++w)
     if (moves[w]) {
       c[w * rs] = from;
       if (from == kOccupied) occ_k[w * fs] = 1;

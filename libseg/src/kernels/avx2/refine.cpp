@@ -37,8 +37,8 @@ __attribute__((target("avx2"))) void pack_states(const std::uint8_t* st, std::si
 __attribute__((target("avx2"))) void write_cells_row(const std::uint8_t* cs, const word_t* w, std::size_t nx,
                                                      std::uint8_t* st) {
   // byte i of a 128-bit half takes cell i / 8 of the four (the low half cells 0, 1; the high 2, 3)
-  const __m256i pick = _mm256_setr_epi8(0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1, 1, 2, 2, 2, 2, 2, 2, 2, 2, 3, 3,
-                                        3, 3, 3, 3, 3, 3);
+  const __m256i pick =
+      _mm256_setr_epi8(0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1, 1, 2, 2, 2, 2, 2, 2, 2, 2, 3, 3, 3, 3, 3, 3, 3, 3);
   const __m256i unknown = _mm256_set1_epi8(static_cast<char>(kUnknown));
   std::size_t x = 0;
   for (; x + 32 <= nx; x += 32) {

@@ -1,5 +1,6 @@
 // The default rules' kernels in AVX-512 F and BW (kernels/rules.hpp), 64 voxels per step.
 #include "kernels/rules.hpp"
+
 #include "rules/voxel_rules.hpp"
 
 #if defined(__x86_64__) && defined(__GNUC__)
@@ -19,7 +20,7 @@ __attribute__((target("avx512f,avx512bw"))) void rules_row(std::uint8_t* st, con
     const std::size_t x = 64 * i;
     const __mmask64 in = n - x >= 64 ? ~__mmask64(0) : (__mmask64(1) << (n - x)) - 1;
     const __m512i s = _mm512_maskz_loadu_epi8(in, st + x);
-    const __mmask64 gap = _mm512_cmpeq_epi8_mask(s, fre) & t[i];           // free, touching: unknown
+    const __mmask64 gap = _mm512_cmpeq_epi8_mask(s, fre) & t[i];             // free, touching: unknown
     const __m512i res_unknown = _mm512_mask_mov_epi8(s, reg[i] | gap, unk);  // own state unknown
     const __m512i res = _mm512_mask_blend_epi8(u[i], _mm512_maskz_mov_epi8(o[i], occ), res_unknown);
     _mm512_mask_storeu_epi8(st + x, in, res);

@@ -29,7 +29,8 @@ __attribute__((always_inline)) inline bool any_occupied(const std::uint8_t* s, s
 }
 
 // next_boundary() from scan position k on, one pair at a time.
-__attribute__((always_inline)) inline std::size_t next_boundary_from(const std::uint8_t* st, std::size_t k, std::size_t len, int step) {
+__attribute__((always_inline)) inline std::size_t next_boundary_from(const std::uint8_t* st, std::size_t k,
+                                                                     std::size_t len, int step) {
   const auto pair = [&](std::size_t q) {
     const std::size_t j = step > 0 ? q : len - 1 - q;
     const std::size_t before = step > 0 ? j - 1 : j + 1;
@@ -40,8 +41,9 @@ __attribute__((always_inline)) inline std::size_t next_boundary_from(const std::
 }
 
 // window_starts() for lanes [x, nx), appending to lanes[count...]; returns the new count.
-__attribute__((always_inline)) inline std::size_t window_starts_from(const std::uint8_t* prev, const std::uint8_t* cur, std::uint8_t* skip,
-                                      std::size_t x, std::size_t nx, std::uint32_t* lanes, std::size_t count) {
+__attribute__((always_inline)) inline std::size_t window_starts_from(const std::uint8_t* prev, const std::uint8_t* cur,
+                                                                     std::uint8_t* skip, std::size_t x, std::size_t nx,
+                                                                     std::uint32_t* lanes, std::size_t count) {
   for (; x < nx; ++x) {
     if (skip[x]) {
       --skip[x];
@@ -53,7 +55,8 @@ __attribute__((always_inline)) inline std::size_t window_starts_from(const std::
 }
 
 // Bits [x, nx) of pack_states() (the words cleared already).
-__attribute__((always_inline)) inline void pack_states_from(const std::uint8_t* st, std::size_t x, std::size_t nx, word_t* unknown, word_t* free) {
+__attribute__((always_inline)) inline void pack_states_from(const std::uint8_t* st, std::size_t x, std::size_t nx,
+                                                            word_t* unknown, word_t* free) {
   for (; x < nx; ++x) {
     unknown[x / 64] |= static_cast<std::uint64_t>(st[x] == kUnknown) << (x % 64);
     free[x / 64] |= static_cast<std::uint64_t>(st[x] == kFree) << (x % 64);
@@ -65,12 +68,14 @@ __attribute__((always_inline)) inline void clear_words(word_t* bits, std::size_t
 }
 
 // Bits [x, n) of pack_equal() (the words cleared already).
-__attribute__((always_inline)) inline void pack_equal_from(const std::uint8_t* bytes, std::size_t x, std::size_t n, std::uint8_t v, word_t* bits) {
+__attribute__((always_inline)) inline void pack_equal_from(const std::uint8_t* bytes, std::size_t x, std::size_t n,
+                                                           std::uint8_t v, word_t* bits) {
   for (; x < n; ++x) bits[x / 64] |= static_cast<std::uint64_t>(bytes[x] == v) << (x % 64);
 }
 
 // Voxels [x, nx) of unpack_unknown().
-__attribute__((always_inline)) inline void unpack_unknown_from(const word_t* w, std::size_t x, std::size_t nx, std::uint8_t* st) {
+__attribute__((always_inline)) inline void unpack_unknown_from(const word_t* w, std::size_t x, std::size_t nx,
+                                                               std::uint8_t* st) {
   for (; x < nx; ++x)
     if ((w[x / 64] >> (x % 64)) & 1u) st[x] = kUnknown;
 }
@@ -83,12 +88,13 @@ __attribute__((always_inline)) inline std::uint64_t spread_bits(std::uint64_t b)
 
 // Voxels [x0, nx) of write_cells_row() (x0 a multiple of 8), a cell (8 voxels, a byte of a word)
 // per step.
-__attribute__((always_inline)) inline void write_cells_row_from(const std::uint8_t* cs, const word_t* w, std::size_t x0, std::size_t nx,
-                                 std::uint8_t* st) {
+__attribute__((always_inline)) inline void write_cells_row_from(const std::uint8_t* cs, const word_t* w, std::size_t x0,
+                                                                std::size_t nx, std::uint8_t* st) {
   std::size_t cx = x0 / 8;
   for (; (cx + 1) * 8 <= nx; ++cx) {
     const std::uint64_t unknown = spread_bits((w[cx / 8] >> (8 * (cx % 8))) & 0xFF);
-    const std::uint64_t v = ((0x0101010101010101ull * cs[cx]) & ~unknown) | (0x0101010101010101ull * kUnknown & unknown);
+    const std::uint64_t v =
+        ((0x0101010101010101ull * cs[cx]) & ~unknown) | (0x0101010101010101ull * kUnknown & unknown);
     std::memcpy(st + 8 * cx, &v, 8);
   }
   for (std::size_t x = 8 * cx; x < nx; ++x) st[x] = ((w[x / 64] >> (x % 64)) & 1u) ? kUnknown : cs[cx];

@@ -3,7 +3,9 @@
 
 namespace occseg::kernels::scalar {
 
-bool any_boundary(const std::uint8_t* a, const std::uint8_t* b, std::size_t n) { return generic::any_boundary(a, b, n); }
+bool any_boundary(const std::uint8_t* a, const std::uint8_t* b, std::size_t n) {
+  return generic::any_boundary(a, b, n);
+}
 
 bool any_occupied(const std::uint8_t* s, std::size_t n) { return generic::any_occupied(s, n); }
 

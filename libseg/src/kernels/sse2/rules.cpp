@@ -1,5 +1,6 @@
 // The default rules' kernels in SSE2 (kernels/rules.hpp), 16 voxels per step: the x86-64 baseline.
 #include "kernels/rules.hpp"
+
 #include "rules/voxel_rules.hpp"
 
 #if defined(__SSE2__)
