@@ -8,7 +8,7 @@
 // scan resumes after the window, so that one boundary never sweeps through a whole segment.
 // `refine_passes` passes of the six scans, in the order x+, x-, y+, y-, z+, z-.
 //
-// How the scans are laid out (the result is the plain scans' of tests/cpp/reference/):
+// How the scans are laid out (they compute what the plain scans of tests/cpp/reference/ do):
 //  - own values are read as the own states' bits (detail::OwnBits);
 //  - along x a row at a time; along y and z the lines of a plane advance together, row by row,
 //    so that every access is a contiguous row of voxels;
