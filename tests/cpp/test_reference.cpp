@@ -16,11 +16,13 @@
 #include "stages/texture.hpp"
 #include "stages/codes.hpp"
 #include "stages/own_states.hpp"
+#include "isa_levels.hpp"
 #include "random_maps.hpp"
 #include "reference/reference.hpp"
 #include "isa_levels.hpp"
 
 using namespace occseg;
+using occseg::testing_isa::for_each_isa;
 
 // The reference sums segment statistics in the library's documented slabs.
 static_assert(reference::kSlab == kLabelSlab);
@@ -123,16 +125,18 @@ TEST(Reference, WholePipelineMatchesForBothPresets) {
         expect_same_segments(r.segments, ref.segments, what);
       }
       // Without the stages kept, the creation leaves the states to the unknown growth, which
-      // writes each row once (every row kernel).
+      // writes each row once (every level's row kernel; the texture's kernels set alongside).
       p.threads = 2;
-      for (int kernel = 0; kernel <= static_cast<int>(detail::TextureKernel::fastest); ++kernel) {
+      const int levels = for_each_isa([&](kernels::Isa level) {
+        const int kernel = std::max(0, static_cast<int>(level) - 1);
         detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
         const Result r = segment(g, p);
         const std::string what = std::string(preset_name(p.preset)) + " seed " + std::to_string(c.seed) +
                                  " kernel " + std::to_string(kernel) + " without the stages";
         EXPECT_EQ(r.labels, ref.labels) << what;
         expect_same_segments(r.segments, ref.segments, what);
-      }
+      });
+      EXPECT_GE(levels, 2);
       detail::set_texture_kernel(detail::TextureKernel::fastest);
     }
   }
@@ -337,7 +341,8 @@ TEST(Reference, ContrastsOnStepBoundariesMatch) {
 
 // The unknown growth on bit masks against the reference's six byte scans, on random per-voxel
 // states (runs of candidates start and end anywhere, also across 64-voxel words and at the row
-// ends), rows of 1 to 200 voxels, any thread count, masks in dirty caller storage or their own.
+// ends), rows of 1 to 200 voxels, any thread count, masks in dirty caller storage or their own,
+// at every kernel level.
 namespace {
 // A map value: 0.5 for a share `half` of the voxels, else 0.2 or 0.9 evenly.
 float band_value(test::Rng& r, double half) {
@@ -396,34 +401,37 @@ TEST(Reference, UnknownGrowthMatchesOnRandomStates) {
       }
       std::vector<std::uint8_t> want = st;
       reference::refine_unknown(want, g, Params());
-      for (int threads : {1, 3}) {
-        Params p;
-        p.threads = threads;
-        std::vector<std::uint8_t> got = st;
-        refine_unknown(got, g, p);
-        EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " threads " << threads;
-        if (round == 3 && d.nx == 200) {  // both rows wholly unknown
-          EXPECT_EQ(std::count(got.begin(), got.begin() + 200, 1) + std::count(got.begin() + 400, got.begin() + 600, 1),
-                    400);
+      for_each_isa([&](kernels::Isa) {
+        for (int threads : {1, 3}) {
+          Params p;
+          p.threads = threads;
+          std::vector<std::uint8_t> got = st;
+          refine_unknown(got, g, p);
+          EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " threads " << threads;
+          if (round == 3 && d.nx == 200) {  // both rows wholly unknown
+            EXPECT_EQ(std::count(got.begin(), got.begin() + 200, 1) +
+                          std::count(got.begin() + 400, got.begin() + 600, 1),
+                      400);
+          }
+          std::vector<std::uint64_t> scratch(detail::grow_unknown_scratch_bytes(d) / 8 + 1, 0xA5A5A5A5A5A5A5A5ull);
+          got = st;
+          const std::vector<std::uint8_t> own = own_states(g, p);
+          detail::grow_unknown(got.data(), own.data(), d, threads, reinterpret_cast<std::uint8_t*>(scratch.data()),
+                               scratch.size() * 8);
+          EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " in scratch";
+          got = st;  // from the unknown bits segment() has, not reading `own`
+          const std::vector<std::uint8_t> no_own(own.size(), 0xEE);
+          detail::grow_unknown(got.data(), no_own.data(), d, threads, nullptr, 0, unknown_bits(g).data());
+          EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " from bits";
         }
-        std::vector<std::uint64_t> scratch(detail::grow_unknown_scratch_bytes(d) / 8 + 1, 0xA5A5A5A5A5A5A5A5ull);
-        got = st;
-        const std::vector<std::uint8_t> own = own_states(g, p);
-        detail::grow_unknown(got.data(), own.data(), d, threads, reinterpret_cast<std::uint8_t*>(scratch.data()),
-                             scratch.size() * 8);
-        EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " in scratch";
-        got = st;  // from the unknown bits segment() has, not reading `own`
-        const std::vector<std::uint8_t> no_own(own.size(), 0xEE);
-        detail::grow_unknown(got.data(), no_own.data(), d, threads, nullptr, 0, unknown_bits(g).data());
-        EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " from bits";
-      }
+      });
     }
 }
 
-// The default rules on random own and created states, every row kernel (the hand-written AVX-512
-// and AVX2 ones, where the processor has them, the AVX2 one for rows of 32 voxels or more, its
-// last step overlapping the one before; the portable one) on the own states as bits (from the map, as segment() has them)
-// and as bytes (the public stage) against the reference: rows of 31 to 200 voxels, regions of
+// The default rules on random own and created states, at every kernel level (the AVX-512 and
+// AVX2 row kernels where the processor has them, the AVX2 one for rows of 32 voxels or more, its
+// last step overlapping the one before; the scalar one) on the own states as bits (from the map,
+// as segment() has them) and as bytes (the public stage) against the reference: rows of 31 to 200 voxels, regions of
 // 0.5 voxels, gaps touching occupied voxels (the flood's seeds) on both row ends.
 TEST(Reference, VoxelRulesMatchOnRandomStates) {
   const Dims dims[] = {{31, 5, 4}, {32, 4, 5}, {33, 6, 5}, {34, 5, 4}, {35, 6, 5},
@@ -445,16 +453,15 @@ TEST(Reference, VoxelRulesMatchOnRandomStates) {
       const std::vector<std::uint8_t> own = own_states(g, Params());
       for (std::size_t i = 0; i < st.size(); i += d.nx)  // a candidate seed at a row end
         seeded_rows += own[i] == 1 && st[i] == 0 && want[i] == 1;
-      for (int vector_rows = 0; vector_rows <= static_cast<int>(detail::TextureKernel::fastest); ++vector_rows) {
-        detail::set_texture_kernel(static_cast<detail::TextureKernel>(vector_rows));  // the rules' kernels follow it
+      for_each_isa([&](kernels::Isa level) {
         for (int threads : {1, 2}) {
           Params p;
           p.threads = threads;
           const detail::OwnBitsStore bits = own_bits(g);
           std::vector<std::uint8_t> got = st;
-          detail::apply_voxel_rules(got.data(), bits.bits, d, p, nullptr, 0);
-          EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " vector " << vector_rows
-                               << " threads " << threads;
+          detail::apply_voxel_rules(got.data(), bits.bits, d, p, nullptr, 0, kernels::active());
+          EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " kernels "
+                               << kernels::isa_name(level) << " threads " << threads;
           got = st;  // the public stage: own states as bytes
           apply_voxel_rules(got, own, d, p);
           EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " from bytes";
@@ -464,11 +471,10 @@ TEST(Reference, VoxelRulesMatchOnRandomStates) {
           std::vector<std::uint8_t> want0 = st;
           reference::apply_voxel_rules(want0, g, p0);
           got = st;
-          detail::apply_voxel_rules(got.data(), bits.bits, d, p, nullptr, 0);
+          detail::apply_voxel_rules(got.data(), bits.bits, d, p, nullptr, 0, kernels::active());
           EXPECT_EQ(got, want0) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " radius 0";
         }
-      }
-      detail::set_texture_kernel(detail::TextureKernel::fastest);
+      });
     }
   EXPECT_GT(seeded_rows, 10u);
 }

@@ -217,9 +217,9 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   // The rest of the label array (3 bytes per voxel, before the own states) takes the unknown
   // growth's bit masks, then the rules': allocated apart, they raised the peak by 0.25 byte per
   // voxel.
-  detail::refine(states.data(), own, grid.dims, params, scratch, room, &growth);
+  detail::refine(states.data(), own, grid.dims, params, scratch, room, &growth, k);
   if (params.preset == Preset::default_preset)
-    detail::apply_voxel_rules(states.data(), own, grid.dims, params, scratch, room);
+    detail::apply_voxel_rules(states.data(), own, grid.dims, params, scratch, room, k);
   if (!workspace) {  // not at the labelling's peak
     local.unknown_bits = std::vector<std::uint64_t>();
     local.occupied_bits = std::vector<std::uint64_t>();

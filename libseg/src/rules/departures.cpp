@@ -1,3 +1,7 @@
+// The `default` preset's per-voxel rules (rules 1-3 of docs/algorithm.md, "Presets"), applied
+// after refinement: rule 2's unknown regions by a morphological opening of the 0.5 voxels, the
+// rules on every voxel (rules/voxel_rules.hpp, through the table's rules_row kernel), and rule 3's
+// flood through the gaps connected to an object.
 #include "rules/departures.hpp"
 
 #include <algorithm>
@@ -5,35 +9,25 @@
 #include <mutex>
 
 #include "occseg/parallel.hpp"
-#include "util/bit_rows.hpp"
-#include "kernels/cpu_features.hpp"
-#include "util/huge_pages.hpp"
+#include "rules/voxel_rules.hpp"
 #include "stages/own_states.hpp"
 #include "stages/refine.hpp"
-#include "stages/texture.hpp"
-
-#ifdef __SSE2__
-#include <emmintrin.h>
-#endif
-#if defined(__x86_64__) && defined(__GNUC__)
-#include <immintrin.h>
-#endif
+#include "util/bit_rows.hpp"
+#include "util/huge_pages.hpp"
 
 namespace occseg {
 
 namespace {
 
-constexpr std::uint8_t kFree = static_cast<std::uint8_t>(State::free);
-constexpr std::uint8_t kUnknown = static_cast<std::uint8_t>(State::unknown);
-constexpr std::uint8_t kOccupied = static_cast<std::uint8_t>(State::occupied);
+using rules::kFree;
+using rules::kUnknown;
 
 // The opening works on bit masks, 64 voxels of a row per word: its six passes then stream 1/8 of
-// the memory the byte masks took (13 MB per pass on a 320 x 320 x 128 map). Row r of the mask is
-// words [r * W, (r + 1) * W), W = ceil(nx / 64), voxel x at bit x % 64 of word x / 64; the bits
-// past nx in a row's last word are kept 0 (bit_rows_internal.hpp). The words live in the mask's
-// own vector, or in scratch storage handed in (segment() gives part of the label array, which
-// then holds no labels yet); every row is written before it is read, so that storage is not
-// cleared.
+// the memory byte masks would. Row r of the mask is words [r * W, (r + 1) * W), W = ceil(nx / 64),
+// voxel x at bit x % 64 of word x / 64; the bits past nx in a row's last word are kept 0
+// (util/bit_rows.hpp). The words live in the mask's own vector, or in scratch storage handed in
+// (segment() gives part of the label array, which then holds no labels yet); every row is written
+// before it is read, so that storage is not cleared.
 using detail::word_t;
 struct BitMask {
   std::size_t nx = 0, rows = 0, W = 0;
@@ -54,10 +48,9 @@ struct BitMask {
 };
 
 // One axis of a box erosion (AND; the outside counts as 1) or dilation (OR; the outside counts as
-// 0) of radius r, from `in` to `out`: the same windows, clipped by the map, as the byte version it
-// replaced (docs/performance.md). Along x, rows [r0, r1). Each word is shifted against the words
-// before and after it, which the loop carries along in registers (reloading them with a test for
-// the row's ends at every shift took 0.64 of the opening's 1.1 ms on the scene).
+// 0) of radius r, from `in` to `out`: windows of 2r + 1 voxels clipped by the map. Along x, rows
+// [r0, r1). Each word is shifted against the words before and after it, which the loop carries
+// along in registers (not reloaded, with a test for the row's ends, at every shift).
 template <bool Erode>
 void box_x_rows(const BitMask& in, BitMask& out, std::size_t r0, std::size_t r1, int r) {
   const std::size_t W = in.W;
@@ -107,28 +100,6 @@ void box_y_plane(const word_t* in, word_t* out, std::size_t ny, std::size_t W, i
   }
 }
 
-// out[x] = bit x of the row, and own[x] at 0.5 (the opening only shrinks the 0.5 mask; kept
-// anyway).
-void unpack_half(const word_t* bits, const std::uint8_t* own, std::size_t nx, std::uint8_t* out) {
-  std::size_t x = 0;
-#ifdef __SSE2__
-  const __m128i one = _mm_set1_epi8(1), half = _mm_set1_epi8(static_cast<char>(kUnknown));
-  for (; x + 16 <= nx; x += 16) {
-    const __m128i set = detail::bytes_of_bits16(bits, x);
-    const __m128i is_half = _mm_cmpeq_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(own + x)), half);
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + x), _mm_and_si128(_mm_and_si128(set, is_half), one));
-  }
-#endif
-  for (; x < nx; ++x) out[x] = static_cast<std::uint8_t>(((bits[x / 64] >> (x % 64)) & 1) & (own[x] == kUnknown));
-}
-
-// The per-voxel rules on one voxel: its state s, own state o, region bit and whether it touches
-// an occupied voxel (own states of its six neighbours).
-inline std::uint8_t rule(std::uint8_t s, std::uint8_t o, std::uint8_t region, bool touches) {
-  const std::uint8_t gap = ((s == kFree) & touches) ? kUnknown : s;
-  return o != kUnknown ? o : (region ? kUnknown : gap);
-}
-
 // The bits of row r's voxels that touch an occupied voxel: its occupied neighbours along x (the
 // row's own bits shifted; the bits past nx are 0, so nothing comes in past the ends) and along y
 // and z (rows ym, yp, zm, zp of occupied bits; rows of zeros outside the map). The rules work on
@@ -142,106 +113,14 @@ void touching_bits(const word_t* o, const word_t* ym, const word_t* yp, const wo
   }
 }
 
-// The rules on a row of n voxels (states st, in place) from bit rows: u and o its own states
-// (OwnBits), reg its region bits, t touching_bits(). Appends the seeds of the gap flood (a gap
-// voxel the rules left unknown that touches an occupied voxel), `first` + x, to `seeds` in x
-// order. The portable kernel, and the reference for the AVX2 one.
-void rules_row(std::uint8_t* st, const word_t* u, const word_t* o, const word_t* reg, const std::uint64_t* t,
-               std::size_t n, std::size_t first, std::vector<std::size_t>& seeds) {
-  for (std::size_t x = 0; x < n; ++x) {
-    const std::size_t i = x / 64;
-    const unsigned b = x % 64;
-    const bool unknown = (u[i] >> b) & 1u, region = (reg[i] >> b) & 1u, touches = (t[i] >> b) & 1u;
-    const std::uint8_t own = unknown ? kUnknown : (((o[i] >> b) & 1u) ? kOccupied : kFree);
-    st[x] = rule(st[x], own, region, touches);
-    if (unknown && !region && touches && st[x] == kUnknown) seeds.push_back(first + x);
-  }
-}
-
-#if defined(__x86_64__) && defined(__GNUC__)
-#define OCCSEG_RULES_AVX2 1
-// rule() on voxels x .. x + 31 of a row, in place, from bit rows as in rules_row(); returns the
-// seeds among them (0xFF).
-__attribute__((target("avx2"))) inline __m256i rules_step_avx2(std::uint8_t* st, const word_t* u, const word_t* o,
-                                                               const word_t* reg, const word_t* t, std::size_t x) {
-  const __m256i unk = _mm256_set1_epi8(static_cast<char>(kUnknown)), fre = _mm256_set1_epi8(static_cast<char>(kFree));
-  const __m256i occ = _mm256_set1_epi8(static_cast<char>(kOccupied));
-  __m256i* const at = reinterpret_cast<__m256i*>(st + x);
-  const __m256i s = _mm256_loadu_si256(at);
-  const __m256i own_unknown = detail::bytes_of_bits32(u, x), region = detail::bytes_of_bits32(reg, x);
-  const __m256i touches = detail::bytes_of_bits32(t, x);
-  const __m256i known = _mm256_and_si256(detail::bytes_of_bits32(o, x), occ);  // free (0) or occupied
-  const __m256i gap = _mm256_blendv_epi8(s, unk, _mm256_and_si256(_mm256_cmpeq_epi8(s, fre), touches));
-  const __m256i res = _mm256_blendv_epi8(known, _mm256_blendv_epi8(gap, unk, region), own_unknown);
-  _mm256_storeu_si256(at, res);
-  const __m256i gap_touching = _mm256_andnot_si256(region, _mm256_and_si256(own_unknown, touches));
-  return _mm256_and_si256(gap_touching, _mm256_cmpeq_epi8(res, unk));
-}
-
-// rules_row() for rows of at least 32 voxels, 32 voxels per step in hand-written AVX2; the last
-// step overlaps the one before instead of a scalar tail (the rules are idempotent: a second
-// application to a result gives the result), and only its new voxels' seeds are taken. The seeds
-// come out of the same steps: a superset of them (before the touching bits) sent most rows of the
-// scene through a scalar search (0.6 of the rules' 2.2 ms).
-__attribute__((target("avx2"))) void rules_row_avx2(std::uint8_t* st, const word_t* u, const word_t* o,
-                                                    const word_t* reg, const std::uint64_t* t, std::size_t n,
-                                                    std::size_t first, std::vector<std::size_t>& seeds) {
-  const auto* const tw = reinterpret_cast<const word_t*>(t);
-  // Steps at x0 = 0, 32, ... and, for the last n % 32 voxels, at n - 32, whose seeds below
-  // `done` (bit k: voxel x0 + k) the step before reported already. (No lambda: it would not be
-  // compiled for AVX2.)
-  for (std::size_t done = 0; done < n;) {
-    const std::size_t x0 = std::min(done, n - 32);
-    auto m = static_cast<std::uint32_t>(_mm256_movemask_epi8(rules_step_avx2(st, u, o, reg, tw, x0)));
-    if (done > x0) m &= ~0u << (done - x0);
-    for (; m; m &= m - 1) seeds.push_back(first + x0 + static_cast<std::size_t>(__builtin_ctz(m)));
-    done = x0 + 32;
-  }
-}
-
-// rules_row() 64 voxels per step in AVX-512 (F, BW): the bit words are the blend and compare
-// masks themselves, so nothing is spread into bytes; the last n % 64 voxels are one masked step.
-__attribute__((target("avx512f,avx512bw"))) void rules_row_avx512(std::uint8_t* st, const word_t* u, const word_t* o,
-                                                                  const word_t* reg, const std::uint64_t* t,
-                                                                  std::size_t n, std::size_t first,
-                                                                  std::vector<std::size_t>& seeds) {
-  const __m512i unk = _mm512_set1_epi8(static_cast<char>(kUnknown)), fre = _mm512_set1_epi8(static_cast<char>(kFree));
-  const __m512i occ = _mm512_set1_epi8(static_cast<char>(kOccupied));
-  for (std::size_t i = 0; 64 * i < n; ++i) {
-    const std::size_t x = 64 * i;
-    const __mmask64 in = n - x >= 64 ? ~__mmask64(0) : (__mmask64(1) << (n - x)) - 1;
-    const __m512i s = _mm512_maskz_loadu_epi8(in, st + x);
-    const __mmask64 gap = _mm512_cmpeq_epi8_mask(s, fre) & t[i];           // free, touching: unknown
-    const __m512i res_unknown = _mm512_mask_mov_epi8(s, reg[i] | gap, unk);  // own state unknown
-    const __m512i res = _mm512_mask_blend_epi8(u[i], _mm512_maskz_mov_epi8(o[i], occ), res_unknown);
-    _mm512_mask_storeu_epi8(st + x, in, res);
-    std::uint64_t m = u[i] & ~reg[i] & t[i] & _mm512_cmpeq_epi8_mask(res, unk) & in;
-    for (; m; m &= m - 1) seeds.push_back(first + x + static_cast<std::size_t>(__builtin_ctzll(m)));
-  }
-}
-#endif
-
-// The rule rows' kernel: the fastest the processor has up to detail::set_texture_kernel()'s
-// setting (which the tests step through).
-enum class RulesKernel { portable, avx2, avx512 };
-RulesKernel rules_kernel(std::size_t nx) {
-#ifdef OCCSEG_RULES_AVX2
-  const detail::TextureKernel k = detail::texture_kernel();
-  if (k >= detail::TextureKernel::avx512 && cpu_has_avx512()) return RulesKernel::avx512;
-  if (k >= detail::TextureKernel::avx2 && cpu_has_avx2() && nx >= 32) return RulesKernel::avx2;
-#endif
-  (void)nx;
-  return RulesKernel::portable;
-}
-
 }  // namespace
 
 namespace {
 
 // Rule 2's regions as a bit mask (a row of bits per row of voxels; bit set: the voxel is at 0.5
 // and in a region). apply_voxel_rules() reads it row by row; the byte mask of unknown_regions()
-// is made from it only when asked for: allocating, zero-filling and writing 13 MB of bytes, and
-// reading them back, cost more than the opening itself.
+// is made from it only when asked for: allocating, zero-filling, writing and reading back a byte
+// per voxel costs more than the opening itself.
 BitMask region_bits(const detail::OwnBits& own, const Dims& d, const Params& params, std::uint8_t* scratch = nullptr,
                     std::size_t scratch_bytes = 0) {
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, rows = ny * nz;
@@ -257,9 +136,9 @@ BitMask region_bits(const detail::OwnBits& own, const Dims& d, const Params& par
   }
   // Opening = erosion then dilation, each three axis passes in the order x, y, z, plane by plane
   // in one pass: each thread takes a stretch of planes and keeps the last 2r + 1 planes eroded in
-  // x and y (Exy) and those fully eroded and dilated in x and y (Dxy) in rings of its own (12.8 KB
-  // a plane on the scene: they stay in L1 and L2), where three passes over whole masks in the
-  // label array, with two waits for all threads, took 1.75 ms on the scene. Per plane z:
+  // x and y (Exy) and those fully eroded and dilated in x and y (Dxy) in rings of its own, small
+  // enough to stay in L1 and L2, instead of three passes over whole masks with two waits for all
+  // threads. Per plane z:
   //   Exy(z) = erode_y(erode_x(0.5 bits of z))
   //   Dxy(z) = dilate_y(dilate_x(AND of Exy(z - r .. z + r)))      (planes outside the map: skipped)
   //   region(z) = OR of Dxy(z - r .. z + r)
@@ -311,14 +190,16 @@ inline bool bit(const BitMask& m, std::size_t row, std::size_t x) { return (m.ro
 
 }  // namespace
 
-std::vector<std::uint8_t> unknown_regions(const std::vector<std::uint8_t>& own, const Dims& d, const Params& params) {
+std::vector<std::uint8_t> unknown_regions(const std::vector<std::uint8_t>& own, const Dims& d, const Params& params,
+                                          const kernels::Table& k) {
   const detail::OwnBitsStore bits = detail::pack_own_bits(own.data(), d, params.threads);
   const BitMask a = region_bits(bits.bits, d, params);
   std::vector<std::uint8_t> m;
   resize_huge(m, own.size());
   const std::size_t nx = d.nx;
   parallel_for_dynamic(a.rows, params.threads, [&](std::size_t r0, std::size_t r1) {
-    for (std::size_t rw = r0; rw < r1; ++rw) unpack_half(a.row(rw), own.data() + rw * nx, nx, m.data() + rw * nx);
+    for (std::size_t rw = r0; rw < r1; ++rw)
+      k.rules.unpack_half(a.row(rw), own.data() + rw * nx, nx, m.data() + rw * nx);
   });
   return m;
 }
@@ -357,7 +238,7 @@ void flood_gaps_from_objects(std::uint8_t* st, const detail::OwnBits& own, const
 }  // namespace
 
 void detail::apply_voxel_rules(std::uint8_t* st, const OwnBits& own, const Dims& d, const Params& params,
-                               std::uint8_t* scratch, std::size_t scratch_bytes) {
+                               std::uint8_t* scratch, std::size_t scratch_bytes, const kernels::Table& k) {
   const BitMask region = region_bits(own, d, params, scratch, scratch_bytes);
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, W = own.words;
   const std::vector<std::uint64_t> none(W, 0);  // outside the map: no occupied neighbour
@@ -365,10 +246,11 @@ void detail::apply_voxel_rules(std::uint8_t* st, const OwnBits& own, const Dims&
   // the gap flood are gathered on the way, slab by slab.
   std::vector<std::size_t> seeds;
   std::mutex seeds_mutex;
-  const RulesKernel kernel = rules_kernel(nx);
+  const kernels::RulesKernels& kr = k.rules;
   parallel_for_dynamic(nz, params.threads, [&](std::size_t z0, std::size_t z1) {
     std::vector<std::size_t> mine;
     std::vector<std::uint64_t> touching(W);
+    const word_t* const t = reinterpret_cast<const word_t*>(touching.data());
     for (std::size_t z = z0; z < z1; ++z)
       for (std::size_t y = 0; y < ny; ++y) {
         const std::size_t r = y + ny * z, i = nx * r;
@@ -377,17 +259,7 @@ void detail::apply_voxel_rules(std::uint8_t* st, const OwnBits& own, const Dims&
         const auto* const out = reinterpret_cast<const word_t*>(none.data());
         touching_bits(o, y > 0 ? o - W : out, y + 1 < ny ? o + W : out, z > 0 ? o - ny * W : out,
                       z + 1 < nz ? o + ny * W : out, W, touching.data());
-#ifdef OCCSEG_RULES_AVX2
-        if (kernel == RulesKernel::avx512) {
-          rules_row_avx512(st + i, u, o, region.row(r), touching.data(), nx, i, mine);
-          continue;
-        }
-        if (kernel == RulesKernel::avx2) {
-          rules_row_avx2(st + i, u, o, region.row(r), touching.data(), nx, i, mine);
-          continue;
-        }
-#endif
-        rules_row(st + i, u, o, region.row(r), touching.data(), nx, i, mine);
+        kr.rules_row(st + i, u, o, region.row(r), t, nx, i, mine);
       }
     std::lock_guard<std::mutex> lock(seeds_mutex);
     seeds.insert(seeds.end(), mine.begin(), mine.end());
@@ -396,17 +268,17 @@ void detail::apply_voxel_rules(std::uint8_t* st, const OwnBits& own, const Dims&
 }
 
 void apply_voxel_rules(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
-                       const Params& params) {
+                       const Params& params, const kernels::Table& k) {
   const detail::OwnBitsStore bits = detail::pack_own_bits(own.data(), d, params.threads);
-  detail::apply_voxel_rules(st.data(), bits.bits, d, params, nullptr, 0);
+  detail::apply_voxel_rules(st.data(), bits.bits, d, params, nullptr, 0, k);
 }
 
-std::vector<std::uint8_t> unknown_regions(const Grid& g, const Params& params) {
-  return unknown_regions(own_states(g, params), g.dims, params);
+std::vector<std::uint8_t> unknown_regions(const Grid& g, const Params& params, const kernels::Table& k) {
+  return unknown_regions(own_states(g, params), g.dims, params, k);
 }
 
-void apply_voxel_rules(std::vector<std::uint8_t>& st, const Grid& g, const Params& params) {
-  apply_voxel_rules(st, own_states(g, params), g.dims, params);
+void apply_voxel_rules(std::vector<std::uint8_t>& st, const Grid& g, const Params& params, const kernels::Table& k) {
+  apply_voxel_rules(st, own_states(g, params), g.dims, params, k);
 }
 
 }  // namespace occseg

@@ -17,9 +17,6 @@
 
 namespace occseg::detail {
 
-// Some occupied voxel among states s[0, n) (refine.cpp).
-bool any_occupied(const std::uint8_t* s, std::size_t n);
-
 // Float thresholds equivalent to the double ones: for every float p,
 // double(p) < below  <=>  p < lo   and   double(p) > above  <=>  p > hi.
 void float_bounds(double below, double above, float& lo, float& hi);
@@ -142,31 +139,7 @@ struct GrowthRows {
 // kMeanCell^3 cells (row by row, into the cells' sums); empty for other blocks.
 std::vector<double> block_means_by_rows(const Grid& grid, const std::vector<Block>& blocks, int threads);
 
-// The refinement steps and the default rules with the own states as bits (the public versions
-// take bytes and pack them). `scratch` (8-byte aligned, or nullptr) may hold the growth's masks
-// and then the rules' region mask if it has room.
-void refine_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& dims, const Params& params);
-void refine_boundaries(std::uint8_t* states, const OwnBits& own, const Dims& dims, const Params& params);
-// The unknown growth of refine_unknown() on bit masks (unknown_growth.cpp), kept in `scratch`
-// (8-byte aligned) when it has grow_unknown_scratch_bytes(), else in an array of its own. With
-// `unknown_bits` (CellRows' bits of `own`), own is not read.
-std::size_t grow_unknown_scratch_bytes(const Dims& dims);
-// With `occupied_rows` (one byte per row of voxels), row r's byte says whether it holds an
-// occupied voxel.
-// With `packed` (GrowthRows filled by the creation), scratch and occupied_rows hold every row's
-// masks and flag already: the states are not read before the scans.
-// With `cell_states` (GrowthRows' deferred states; `packed` too), the states are not read or
-// written before: every row is written at the end from its cells' states and the grown voxels.
-void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& dims, int threads,
-                  std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits = nullptr,
-                  std::uint8_t* occupied_rows = nullptr, bool packed = false,
-                  const std::uint8_t* cell_states = nullptr);
-
-// refine_unknown() then refine_boundaries(), the masks of the first in `scratch` if it has room;
-// `growth` (its scratch the same as `scratch`), when the creation filled it.
-void refine(std::uint8_t* states, const OwnBits& own, const Dims& dims, const Params& params, std::uint8_t* scratch,
-            std::size_t scratch_bytes, const GrowthRows* growth = nullptr);
-void apply_voxel_rules(std::uint8_t* states, const OwnBits& own, const Dims& dims, const Params& params,
-                       std::uint8_t* scratch, std::size_t scratch_bytes);
+// (The refinement and the default rules on these bits: detail::refine() in stages/refine.hpp,
+// detail::apply_voxel_rules() in rules/departures.hpp.)
 
 }  // namespace occseg::detail

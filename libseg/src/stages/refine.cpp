@@ -1,3 +1,19 @@
+// Stage 5, step 2 (section 3.3): the free/occupied scans with the look-ahead window; refine()
+// runs step 1 (refine_unknown.cpp) and then this.
+//
+// Along each of the six axis directions, at every free->occupied (occupied->free) boundary, the
+// voxels just beyond it that belong to the segment entered, up to `lookahead` of them (the
+// window), are examined by their own values, and some move to the segment before the boundary
+// by the paper's four cases: reassign_window(), their one statement, which every scan calls. The
+// scan resumes after the window, so that one boundary never sweeps through a whole segment.
+// `refine_passes` passes of the six scans, in the order x+, x-, y+, y-, z+, z-.
+//
+// How the scans are laid out (they compute what the plain scans of tests/cpp/reference/ do):
+//  - own values are read as the own states' bits (detail::OwnBits);
+//  - along x a row at a time; along y and z the lines of a plane advance together, row by row,
+//    so that every access is a contiguous row of voxels;
+//  - a free/occupied pair needs an occupied voxel, so rows without one are skipped;
+//  - consecutive sweeps along x and y run plane by plane, along z and x slice by slice.
 #include "stages/refine.hpp"
 
 #include <algorithm>
@@ -5,12 +21,8 @@
 #include <utility>
 
 #include "occseg/parallel.hpp"
-#include "util/huge_pages.hpp"
 #include "stages/own_states.hpp"
-
-#ifdef __SSE2__
-#include <emmintrin.h>
-#endif
+#include "util/huge_pages.hpp"
 
 namespace occseg {
 
@@ -23,30 +35,46 @@ using detail::OwnBits;
 constexpr std::uint8_t kFree = static_cast<std::uint8_t>(State::free);
 static_assert(static_cast<int>(State::unknown) == 1, "an unknown bit is the state's value");
 constexpr std::uint8_t kOccupied = static_cast<std::uint8_t>(State::occupied);
-constexpr int kMaxLook = 64;  // params.lookahead's upper bound
 
-// The four cases on own states (own[k] == kFree: p below the band, kOccupied: above it).
-void classify_own(const std::uint8_t* own, int n, std::uint8_t from, bool* reassign) {
-  bool low = false, high = false;
-  for (int k = 0; k < n; ++k) {
-    low = low || own[k] == kFree;
-    high = high || own[k] == kOccupied;
-    reassign[k] = false;
-  }
-  const bool other = (from == kFree) ? low : high;
-  const bool own_side = (from == kFree) ? high : low;
-  if (!other) return;  // cases i and ii
-  for (int k = 0; k < n; ++k)
-    reassign[k] = !own_side || ((from == kFree) ? own[k] != kOccupied : own[k] != kFree);  // iii / iv
+// ---- The window at one boundary and the four cases ----
+
+constexpr int kMaxLook = 64;  // params.lookahead's upper bound (pipeline/params.cpp)
+
+int lookahead_of(const Params& params) { return std::clamp(params.lookahead, 1, kMaxLook); }
+
+// The window at a boundary: the voxels of the entered segment from the boundary voxel c[0] on,
+// `stride` apart, at most `look` of them and at most `room` (the voxels left in the line).
+inline int window_length(const std::uint8_t* c, std::ptrdiff_t stride, std::size_t room, int look) {
+  int n = 1;  // the boundary voxel itself
+  while (n < look && static_cast<std::size_t>(n) < room && c[n * stride] == c[0]) ++n;
+  return n;
 }
 
-// classify_own() on a window of n voxels entered from state `from` (free or occupied), voxel k at
-// pos(k) = (word index, bit) of the bit arrays: the occupied bits first, which alone decide most
-// windows (into an object whose voxels are all occupied, or out of one into free space with none:
-// no evidence for `from`, nothing moves), the unknown bits only for the others (refinement on the
-// noisy map 119-122 -> 106-110 ms, on the scene 6.3 -> 6.0-6.5 ms).
+// The four cases for a window entered from state `from` (free or occupied; the segment entered
+// has the other one), on its voxels' own states own[0, n): moves[k] says whether voxel k moves to
+// `from`. An own value on `from`'s side argues for the state before the boundary, one on the
+// entered segment's side for the segment, one at 0.5 for neither:
+//   (i)   all at 0.5, or
+//   (ii)  only the segment's side (and 0.5): nothing moves;
+//   (iii) only `from`'s side (and 0.5): every voxel moves;
+//   (iv)  both sides: the voxels on `from`'s side or at 0.5 move.
+void reassign_window(const std::uint8_t* own, int n, std::uint8_t from, bool* moves) {
+  const std::uint8_t into = from == kFree ? kOccupied : kFree;
+  bool for_from = false, for_into = false;
+  for (int k = 0; k < n; ++k) {
+    for_from = for_from || own[k] == from;
+    for_into = for_into || own[k] == into;
+  }
+  for (int k = 0; k < n; ++k) moves[k] = for_from && (!for_into || own[k] != into);
+}
+
+// reassign_window() on a window of the own states' bits, voxel k at pos(k) = (word index, bit);
+// false when nothing moves (moves[] then unwritten). The occupied bits come first: where they
+// show no voxel on `from`'s side (entering an object whose voxels are all occupied, or leaving one
+// into space with none), the window is case (i) or (ii) whatever its unknown bits, and they are
+// not read. That decides most windows.
 template <class Pos>
-void classify_window(const OwnBits& own, int n, std::uint8_t from, bool* reassign, Pos&& pos) {
+bool reassign_window(const OwnBits& own, int n, std::uint8_t from, bool* moves, Pos&& pos) {
   std::uint8_t occupied[kMaxLook];
   bool any = false, all = true;
   for (int k = 0; k < n; ++k) {
@@ -55,85 +83,43 @@ void classify_window(const OwnBits& own, int n, std::uint8_t from, bool* reassig
     any = any || occupied[k];
     all = all && occupied[k];
   }
-  if (from == kFree ? all : !any) {  // no voxel at the other side of the band from `from`
-    std::fill(reassign, reassign + n, false);
-    return;
-  }
+  if (from == kFree ? all : !any) return false;
   std::uint8_t win[kMaxLook];
   for (int k = 0; k < n; ++k) {
     const auto [i, b] = pos(k);
     win[k] = occupied[k] ? kOccupied : static_cast<std::uint8_t>((own.unknown[i] >> b) & 1u);  // (kUnknown is 1)
   }
-  classify_own(win, n, from, reassign);
+  reassign_window(win, n, from, moves);
+  return true;
 }
 
-inline bool is_boundary(std::uint8_t a, std::uint8_t s) {
-  return (a == kFree && s == kOccupied) || (a == kOccupied && s == kFree);
-}
-
-// ---- vector tests: is there anything to do in these n voxels? ----
-
-// Some free/occupied pair a[x], b[x] (states are 0..2, so only those two differ by xor 2).
-__attribute__((target_clones("avx2", "default")))
-bool any_boundary(const std::uint8_t* __restrict a, const std::uint8_t* __restrict b, std::size_t n) {
-  std::uint8_t any = 0;
-  for (std::size_t x = 0; x < n; ++x) any |= static_cast<std::uint8_t>((a[x] ^ b[x]) == (kFree ^ kOccupied));
-  return any != 0;
-}
-
-// ---- scans along x: one row at a time, rows without any candidate skipped by a vector test ----
-
-// Scan position of the next free/occupied boundary at or after scan position k (k >= 1) of a row
-// of len voxels scanned forward (step > 0: pair st[k-1], st[k]) or backward (pair st[j+1], st[j]
-// with j = len-1-k); len when there is none. 16 pairs per step where SSE2 exists.
-std::size_t next_boundary(const std::uint8_t* st, std::size_t k, std::size_t len, int step) {
-  const auto pair = [&](std::size_t q) {
-    const std::size_t j = step > 0 ? q : len - 1 - q;
-    const std::size_t before = step > 0 ? j - 1 : j + 1;
-    return ((st[before] ^ st[j]) & 3) == (kFree ^ kOccupied);
-  };
-#ifdef __SSE2__
-  const __m128i two = _mm_set1_epi8(kFree ^ kOccupied);
-  while (k + 16 <= len) {
-    // memory span of scan positions [k, k + 16): forward j = k..k+15, backward j = len-k-16..len-1-k
-    const std::size_t j0 = step > 0 ? k : len - k - 16;
-    const std::size_t b0 = step > 0 ? j0 - 1 : j0 + 1;
-    const __m128i x = _mm_xor_si128(_mm_loadu_si128(reinterpret_cast<const __m128i*>(st + j0)),
-                                    _mm_loadu_si128(reinterpret_cast<const __m128i*>(st + b0)));
-    const auto m = static_cast<unsigned>(_mm_movemask_epi8(_mm_cmpeq_epi8(x, two)));
-    if (m) return step > 0 ? k + static_cast<std::size_t>(__builtin_ctz(m)) : k + 15 - static_cast<std::size_t>(31 - __builtin_clz(m));
-    k += 16;
-  }
-#endif
-  while (k < len && !pair(k)) ++k;
-  return k;
-}
+// ---- Scans along x: one row at a time ----
 
 // Row r of the map (states `st`, own states row r of `own`), scanned forward or backward.
-void boundary_row(std::uint8_t* st, const OwnBits& own, std::size_t r, std::size_t len, int step, int look) {
+void scan_row(std::uint8_t* st, const OwnBits& own, std::size_t r, std::size_t len, int step, int look,
+              const kernels::RefineKernels& kr) {
   if (len < 2) return;
-  if (!any_boundary(st, st + 1, len - 1)) return;  // windows only ever start at a boundary
+  if (!kr.any_boundary(st, st + 1, len - 1)) return;  // windows only ever start at a boundary
   const std::ptrdiff_t stride = step;
   std::uint8_t* first = step > 0 ? st : st + len - 1;
-  bool re[kMaxLook];
-  std::size_t k = 1;
-  while ((k = next_boundary(st, k, len, step)) < len) {
-    std::uint8_t* c = first + static_cast<std::ptrdiff_t>(k) * stride;
-    const std::uint8_t a = c[-stride], s = c[0];
-    int n = 0;
-    while (n < look && k + n < len && c[n * stride] == s) ++n;
-    classify_window(own, n, a, re, [&](int w) {
-      const std::size_t q = k + static_cast<std::size_t>(w), x = step > 0 ? q : len - 1 - q;
+  bool moves[kMaxLook];
+  std::size_t q = 1;  // scan position: voxel q forward, len - 1 - q backward
+  while ((q = kr.next_boundary(st, q, len, step)) < len) {
+    std::uint8_t* c = first + static_cast<std::ptrdiff_t>(q) * stride;
+    const std::uint8_t from = c[-stride];
+    const int n = window_length(c, stride, len - q, look);
+    const bool some = reassign_window(own, n, from, moves, [&](int w) {
+      const std::size_t p = q + static_cast<std::size_t>(w), x = step > 0 ? p : len - 1 - p;
       return std::pair<std::size_t, unsigned>(r * own.words + x / 64, static_cast<unsigned>(x % 64));
     });
-    for (int w = 0; w < n; ++w)
-      if (re[w]) c[w * stride] = a;
-    k += static_cast<std::size_t>(n);  // resume after the window: no cascade through it
+    for (int w = 0; some && w < n; ++w)
+      if (moves[w]) c[w * stride] = from;
+    q += static_cast<std::size_t>(n);  // resume after the window
   }
 }
 
-// ---- scans along y and z: the lines of one plane advance together, row by row, so every
-// access is a contiguous row of nx voxels; each line keeps its own state (its skip count). ----
+// ---- Scans along y and z: the lines of one plane advance together, row by row; each line (a
+// lane x of the rows) keeps its own state, the voxels left in its running window ----
 
 struct Plane {
   std::size_t rows;    // length of the lines (ny or nz)
@@ -146,38 +132,39 @@ inline Plane plane_shape(const Dims& d, int axis) {
   return axis == 1 ? Plane{d.ny, static_cast<std::ptrdiff_t>(d.nx)} : Plane{d.nz, static_cast<std::ptrdiff_t>(d.nx * d.ny)};
 }
 
-// Starts the window of lane x at row k of a plane scan; returns the lane's new skip count. The
-// own states of scan row k + w are in row orow + w * ors of `own`. A window that writes occupied
-// voxels marks their rows in `occ` (the flag of row k + w is occ_k[w * fs]).
+// The window of lane x at row k of a plane scan (`cur`: that row; rows `rs` apart in scan order);
+// returns the voxels of the window after the first (the lane's new skip count). The own states of
+// scan row k + w are in row orow + w * ors of `own`. A window that writes occupied voxels marks
+// their rows in `occ` (the flag of row k + w is occ_k[w * fs]).
 inline std::uint8_t plane_window(std::uint8_t* cur, const OwnBits& own, std::size_t orow, std::ptrdiff_t ors,
                                  std::size_t x, std::ptrdiff_t rs, std::size_t k, std::size_t rows, int look,
-                                 std::uint8_t a, std::uint8_t* occ_k, std::ptrdiff_t fs) {
-  bool re[kMaxLook];
-  const std::uint8_t s = cur[x];
-  int n = 1;  // the boundary voxel itself always belongs
-  while (n < look && k + n < rows && cur[static_cast<std::ptrdiff_t>(x) + n * rs] == s) ++n;
+                                 std::uint8_t from, std::uint8_t* occ_k, std::ptrdiff_t fs) {
+  bool moves[kMaxLook];
+  std::uint8_t* const c = cur + x;
+  const int n = window_length(c, rs, rows - k, look);
   // (lane x: the same bit of every row's words)
   const std::size_t i0 = orow * own.words + x / 64;
   const std::ptrdiff_t di = ors * static_cast<std::ptrdiff_t>(own.words);
   const auto b = static_cast<unsigned>(x % 64);
-  classify_window(own, n, a, re, [&](int w) {
+  const bool some = reassign_window(own, n, from, moves, [&](int w) {
     return std::pair<std::size_t, unsigned>(static_cast<std::size_t>(static_cast<std::ptrdiff_t>(i0) + w * di), b);
   });
-  for (int w = 0; w < n; ++w)
-    if (re[w]) {
-      cur[static_cast<std::ptrdiff_t>(x) + w * rs] = a;
-      if (a == kOccupied) occ_k[w * fs] = 1;
+  for (int w = 0; some && w < n; ++w)
+    if (moves[w]) {
+      c[w * rs] = from;
+      if (from == kOccupied) occ_k[w * fs] = 1;
     }
   return static_cast<std::uint8_t>(n - 1);  // resume after the window
 }
 
-// Rows the scan of a plane passes over: a free/occupied pair needs an occupied voxel in one of
-// its two rows, so a pair of rows without one (flags in `occ`: row r at occ[r * occ_row], a
-// superset kept by the windows) is skipped unread; on the benchmark scene 95 % of the rows hold no
-// occupied voxel. Running windows still count down there. Row r of the plane has its own states
-// in row orow0 + r * occ_row of `own` (the flags are per row of the map too).
-void boundary_plane(std::uint8_t* st, const OwnBits& own, std::size_t orow0, std::size_t nx, Plane pl, int step,
-                    int look, std::uint8_t* skip, std::uint8_t* occ, std::ptrdiff_t occ_row) {
+// One plane's lines, scanned forward or backward. A free/occupied pair needs an occupied voxel in
+// one of its two rows, so a pair of rows without one (flags in `occ`: row r at occ[r * occ_row], a
+// superset kept by the windows) is skipped unread; running windows still count down there. Row r
+// of the plane has its own states in row orow0 + r * occ_row of `own` (the flags are per row of
+// the map too). `skip` and `lanes`: nx entries of scratch.
+void scan_plane(std::uint8_t* st, const OwnBits& own, std::size_t orow0, std::size_t nx, Plane pl, int step, int look,
+                std::uint8_t* skip, std::uint32_t* lanes, std::uint8_t* occ, std::ptrdiff_t occ_row,
+                const kernels::RefineKernels& kr) {
   std::fill(skip, skip + nx, 0);
   const std::ptrdiff_t rs = pl.row * step;  // signed distance from one row to the next in scan order
   const std::ptrdiff_t fs = occ_row * step;  // the same for the rows' flags (and own states' rows)
@@ -197,47 +184,18 @@ void boundary_plane(std::uint8_t* st, const OwnBits& own, std::size_t orow0, std
       continue;
     }
     // A lane starts a window where it sees a boundary and has none running; running windows count
-    // down. Lanes are independent, so a vector test finds the starting lanes of 16 at once.
-    std::size_t x = 0;
-#ifdef __SSE2__
-    const __m128i two = _mm_set1_epi8(kFree ^ kOccupied), zero = _mm_setzero_si128(), one = _mm_set1_epi8(1);
-    for (; x + 16 <= nx; x += 16) {
-      const __m128i p = _mm_loadu_si128(reinterpret_cast<const __m128i*>(prev + x));
-      const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(cur + x));
-      const __m128i sk = _mm_loadu_si128(reinterpret_cast<const __m128i*>(skip + x));
-      const __m128i start = _mm_and_si128(_mm_cmpeq_epi8(_mm_xor_si128(p, c), two), _mm_cmpeq_epi8(sk, zero));
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(skip + x), _mm_subs_epu8(sk, one));
-      for (auto m = static_cast<unsigned>(_mm_movemask_epi8(start)); m; m &= m - 1) {
-        const std::size_t lane = x + static_cast<std::size_t>(__builtin_ctz(m));
-        skip[lane] = plane_window(cur, own, ocur, fs, lane, rs, k, pl.rows, look, prev[lane], fk, fs);
-        last_start = k;
-      }
+    // down. Lanes are independent: a window writes its own lane only.
+    const std::size_t starts = kr.window_starts(prev, cur, skip, nx, lanes);
+    for (std::size_t j = 0; j < starts; ++j) {
+      const std::size_t x = lanes[j];
+      skip[x] = plane_window(cur, own, ocur, fs, x, rs, k, pl.rows, look, prev[x], fk, fs);
     }
-#endif
-    for (; x < nx; ++x) {
-      if (skip[x]) {
-        --skip[x];
-        continue;
-      }
-      if (is_boundary(prev[x], cur[x])) {
-        skip[x] = plane_window(cur, own, ocur, fs, x, rs, k, pl.rows, look, prev[x], fk, fs);
-        last_start = k;
-      }
-    }
+    if (starts) last_start = k;
   }
 }
 
-// Some occupied voxel among s[0, n).
-__attribute__((target_clones("avx2", "default")))
-bool any_occupied_row(const std::uint8_t* s, std::size_t n) {
-  std::uint8_t any = 0;
-  for (std::size_t x = 0; x < n; ++x) any |= static_cast<std::uint8_t>(s[x] == kOccupied);
-  return any != 0;
-}
+// ---- The sweeps: every line along one axis, forward then backward ----
 
-// One refinement step: the forward and the backward scan of every line along `axis` for
-// free/occupied boundaries, with windows of `look` voxels. (The unknown growth runs on bit masks:
-// unknown_growth.cpp.)
 struct Sweep {
   int axis;
 };
@@ -252,9 +210,10 @@ struct Sweep {
 // and x slice by slice (y fixed): the lines of both axes lie inside that plane, so a plane's x
 // sweep followed by its y sweep reads and writes exactly what the whole x sweep followed by the
 // whole y sweep would. The default call's six sweeps (two passes x y z) read the map four times
-// instead of six (docs/performance.md, "Fifth round").
+// instead of six.
 void run_sweeps(std::uint8_t* states, const OwnBits& own, const Dims& d, int threads, int look,
-                const std::vector<Sweep>& sweeps, std::uint8_t* occupied_rows = nullptr) {
+                const std::vector<Sweep>& sweeps, const kernels::RefineKernels& kr,
+                std::uint8_t* occupied_rows = nullptr) {
   std::uint8_t* const st = states;
   // Per row of voxels (row r: y = r % ny, z = r / ny): may hold an occupied voxel. Handed in
   // (`occupied_rows`, found by the unknown growth as it packed the rows), or set from the states
@@ -264,15 +223,16 @@ void run_sweeps(std::uint8_t* states, const OwnBits& own, const Dims& d, int thr
   std::uint8_t* const occ = occupied_rows ? occupied_rows : own_flags.data();
   bool occ_ready = occupied_rows != nullptr;
   const auto row = [&](std::size_t first, int step) {
-    if (occ[first / d.nx]) boundary_row(st + first, own, first / d.nx, d.nx, step, look);
+    if (occ[first / d.nx]) scan_row(st + first, own, first / d.nx, d.nx, step, look, kr);
   };
-  const auto plane = [&](const Sweep& s, std::size_t o, std::uint8_t* lane, int step) {
+  const auto plane = [&](const Sweep& s, std::size_t o, std::uint8_t* skip, std::uint32_t* lanes, int step) {
     const Plane pl = plane_shape(d, s.axis);
     const std::size_t base = plane_base(d, s.axis, o);
     if (s.axis == 1)  // rows y of plane z = o: rows d.ny * o + y of the map
-      boundary_plane(st + base, own, d.ny * o, d.nx, pl, step, look, lane, occ + d.ny * o, 1);
+      scan_plane(st + base, own, d.ny * o, d.nx, pl, step, look, skip, lanes, occ + d.ny * o, 1, kr);
     else  // rows z of slice y = o: rows o + d.ny * z
-      boundary_plane(st + base, own, o, d.nx, pl, step, look, lane, occ + o, static_cast<std::ptrdiff_t>(d.ny));
+      scan_plane(st + base, own, o, d.nx, pl, step, look, skip, lanes, occ + o, static_cast<std::ptrdiff_t>(d.ny),
+                 kr);
   };
   for (std::size_t g = 0; g < sweeps.size();) {
     // The group's other axis: y (planes of fixed z) or z (slices of fixed y); a lone x sweep
@@ -289,13 +249,14 @@ void run_sweeps(std::uint8_t* states, const OwnBits& own, const Dims& d, int thr
     // the rows of plane z = o (by_z) or of slice y = o: `rows` rows of nx voxels, `stride` apart
     const std::size_t rows = by_z ? d.ny : d.nz, stride = by_z ? d.nx : d.nx * d.ny;
     parallel_for_dynamic(by_z ? d.nz : d.ny, threads, [&](std::size_t o0, std::size_t o1) {
-      std::vector<std::uint8_t> lane(d.nx);
+      std::vector<std::uint8_t> skip(d.nx);
+      std::vector<std::uint32_t> lanes(d.nx);
       for (std::size_t o = o0; o < o1; ++o) {
         const std::size_t first = by_z ? d.nx * d.ny * o : d.nx * o;
         if (flag_rows)
           for (std::size_t r = 0; r < rows; ++r) {
             const std::size_t i = first + r * stride;
-            occ[i / d.nx] = any_occupied_row(st + i, d.nx);
+            occ[i / d.nx] = kr.any_occupied(st + i, d.nx);
           }
         for (std::size_t k = g; k < e; ++k) {
           const Sweep& s = sweeps[k];
@@ -305,8 +266,8 @@ void run_sweeps(std::uint8_t* states, const OwnBits& own, const Dims& d, int thr
               row(first + r * stride, -1);
             }
           } else {
-            plane(s, o, lane.data(), +1);
-            plane(s, o, lane.data(), -1);
+            plane(s, o, skip.data(), lanes.data(), +1);
+            plane(s, o, skip.data(), lanes.data(), -1);
           }
         }
       }
@@ -323,13 +284,7 @@ std::vector<Sweep> boundary_sweeps(const Params& params) {
   return s;
 }
 
-int lookahead_of(const Params& params) { return std::clamp(params.lookahead, 1, kMaxLook); }
-
 }  // namespace
-
-// (A plain function calling the multiversioned one: Clang refuses to make a function declared
-// earlier without target_clones multiversioned.)
-bool detail::any_occupied(const std::uint8_t* s, std::size_t n) { return any_occupied_row(s, n); }
 
 void detail::float_bounds(double below, double above, float& lo, float& hi) {
   lo = static_cast<float>(below);
@@ -353,67 +308,45 @@ std::vector<std::uint8_t> own_states(const Grid& g, const Params& params) {
   return own;
 }
 
-void detail::refine_unknown(std::uint8_t* st, const std::uint8_t* own, const Dims& d,
-                            const Params& params) {
-  grow_unknown(st, own, d, params.threads, nullptr, 0);  // x+, x-, y+, y-, z+, z-
-}
-
-void refine_unknown(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
-                    const Params& params) {
-  detail::refine_unknown(st.data(), own.data(), d, params);
-}
-
-void detail::refine_boundaries(std::uint8_t* st, const OwnBits& own, const Dims& d, const Params& params) {
-  run_sweeps(st, own, d, params.threads, lookahead_of(params), boundary_sweeps(params));
-}
-
 void detail::refine(std::uint8_t* st, const OwnBits& own, const Dims& d, const Params& params, std::uint8_t* scratch,
-                    std::size_t scratch_bytes, const GrowthRows* growth) {
-  // The growth reads every row anyway (or the creation flagged them): rows with an occupied voxel
-  // are flagged for the sweeps (the growth never makes or unmakes one), which then need not read
-  // the map once more (0.4 ms).
+                    std::size_t scratch_bytes, const GrowthRows* growth, const kernels::Table& k) {
+  // Step 1. The growth reads every row anyway (or the creation flagged them): rows with an
+  // occupied voxel are flagged for the sweeps (the growth never makes or unmakes one), which then
+  // need not read the map once more.
   const bool packed = growth && growth->filled && growth->scratch == scratch;
   std::vector<std::uint8_t> own_flags(growth ? 0 : d.ny * d.nz);  // (growth has room for them)
   std::uint8_t* const occupied_rows = growth ? growth->occupied_rows : own_flags.data();
   grow_unknown(st, nullptr, d, params.threads, scratch, scratch_bytes, own.unknown, occupied_rows, packed,
-               packed && !growth->cell_states.empty() ? growth->cell_states.data() : nullptr);
-  run_sweeps(st, own, d, params.threads, lookahead_of(params), boundary_sweeps(params), occupied_rows);
+               packed && !growth->cell_states.empty() ? growth->cell_states.data() : nullptr, k);
+  // Step 2.
+  run_sweeps(st, own, d, params.threads, lookahead_of(params), boundary_sweeps(params), k.refine, occupied_rows);
+}
+
+void refine_unknown(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
+                    const Params& params, const kernels::Table& k) {
+  detail::grow_unknown(st.data(), own.data(), d, params.threads, nullptr, 0, nullptr, nullptr, false, nullptr, k);
 }
 
 void refine_boundaries(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,
-                       const Params& params) {
+                       const Params& params, const kernels::Table& k) {
   const detail::OwnBitsStore bits = detail::pack_own_bits(own.data(), d, params.threads);
-  detail::refine_boundaries(st.data(), bits.bits, d, params);
+  run_sweeps(st.data(), bits.bits, d, params.threads, lookahead_of(params), boundary_sweeps(params), k.refine);
 }
 
-void refine_unknown(std::vector<std::uint8_t>& st, const Grid& g, const Params& params) {
-  refine_unknown(st, own_states(g, params), g.dims, params);
+void refine_unknown(std::vector<std::uint8_t>& st, const Grid& g, const Params& params, const kernels::Table& k) {
+  refine_unknown(st, own_states(g, params), g.dims, params, k);
 }
 
-void refine_boundaries(std::vector<std::uint8_t>& st, const Grid& g, const Params& params) {
-  refine_boundaries(st, own_states(g, params), g.dims, params);
+void refine_boundaries(std::vector<std::uint8_t>& st, const Grid& g, const Params& params, const kernels::Table& k) {
+  refine_boundaries(st, own_states(g, params), g.dims, params, k);
 }
 
-void classify_window(const float* p, int n, std::uint8_t from, std::uint8_t into,
-                     const Params& params, bool* reassign) {
-  bool low = false, high = false;
-  for (int k = 0; k < n; ++k) {
-    low = low || p[k] < params.free_below;
-    high = high || p[k] > params.occupied_above;
-    reassign[k] = false;
-  }
-  // The entered segment's "other side": values that argue for the state we came from.
-  const bool other = (from == kFree) ? low : high;
-  const bool own = (from == kFree) ? high : low;
-  if (!other) return;  // cases i and ii: all at 0.5, or only the entered state's own evidence
-  for (int k = 0; k < n; ++k) {
-    if (!own) {
-      reassign[k] = true;  // case iii: the window argues only for `from`
-    } else {               // case iv: mixed; values on `from`'s side or at 0.5 move
-      reassign[k] = (from == kFree) ? !(p[k] > params.occupied_above) : !(p[k] < params.free_below);
-    }
-  }
-  (void)into;
+void classify_window(const float* p, int n, std::uint8_t from, std::uint8_t into, const Params& params,
+                     bool* reassign) {
+  (void)into;  // (the state other than `from`)
+  std::vector<std::uint8_t> own(static_cast<std::size_t>(std::max(n, 0)));
+  for (int k = 0; k < n; ++k) own[static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(params.state_of(p[k]));
+  reassign_window(own.data(), n, from, reassign);
 }
 
 }  // namespace occseg

@@ -1,98 +1,51 @@
-// The unknown growth of the refinement (section 3.3's scans for unknown voxels) on bit masks.
+// Stage 5, step 1 (section 3.3): unknown segments grow into free voxels at 0.5 along the six
+// scan directions.
 //
-// The six scans only ever turn "candidates" (voxels the texture calls free whose own value is in
-// the band, own state unknown) into unknown voxels, along each line in scan order: x+, x-, y+, y-,
-// z+, z-. Two bits per voxel say all there is: W (state unknown) and C (candidate), 64 voxels of
-// a row per word. Along x a scan fills each run of candidates next to an unknown voxel (an
-// addition carries through the run, or a search finds its start); along y and z a row takes
-// W[k] |= W[k-1] & C[k] from the row before it, 64 lanes at once. The byte scans this replaces
-// tested every row and direction on three rows of bytes (the row before, the row, its own
-// states) before scanning it: 5.5 of the scene's 13.5 ms of refinement, 2.6 now
-// (docs/performance.md, "Fifth round").
-#include <algorithm>
-#include <cstring>
+// The rule: along a scan, a candidate (a voxel the segmentation calls free whose own value is in
+// the band, "equal to 0.5") right after an unknown voxel becomes unknown; the scan goes on from
+// it, so a run of candidates after an unknown voxel becomes unknown up to the first voxel with
+// another value. The scans run x+, x-, y+, y-, z+, z-, each on the result of the one before.
+//
+// The scans work on two bit masks, 64 voxels of a row per word: W (state unknown) and C (the
+// candidates still free). Along y and z a row takes the rule from the row before it in scan
+// order, 64 lanes at once: grow_from(), the rule as written. Along x the voxels of a scan follow
+// each other in one row of bits; grow_up() and grow_down() fill whole runs of candidates at once
+// (Refine.GrowthAlongXIsTheRuleAlongZ checks them against grow_from() on the same lines).
+#include <cstdint>
+#include <vector>
 
-#if defined(__x86_64__) && defined(__GNUC__)
-#include <immintrin.h>
-#endif
-
-#include "stages/create.hpp"
+#include "kernels/kernels.hpp"
 #include "occseg/parallel.hpp"
-#include "stages/texture.hpp"
-#include "util/bit_rows.hpp"
-#include "kernels/cpu_features.hpp"
+#include "stages/create.hpp"
 #include "stages/own_states.hpp"
+#include "stages/refine.hpp"
+#include "util/bit_rows.hpp"
 #include "util/thread_scratch.hpp"
 
 namespace occseg::detail {
 
 namespace {
 
-constexpr std::uint8_t kFree = static_cast<std::uint8_t>(State::free);
 constexpr std::uint8_t kUnknown = static_cast<std::uint8_t>(State::unknown);
 
-#if defined(__x86_64__) && defined(__GNUC__)
-#define OCCSEG_GROWTH_AVX2 1
-#endif
-
-// W and C of one row from the states and the bits of the own states' unknown voxels (u): C is
-// "free" and u. (bits past nx stay 0: u's are 0.)
-void pack_row_bits(const std::uint8_t* st, const word_t* u, std::size_t nx, word_t* w, word_t* c) {
-  const std::size_t words = (nx + 63) / 64;
-  std::fill(w, w + words, 0);
-  std::fill(c, c + words, 0);
-  std::size_t x = 0;
-#ifdef __SSE2__
-  const __m128i unknown = _mm_set1_epi8(static_cast<char>(kUnknown)), free = _mm_set1_epi8(static_cast<char>(kFree));
-  for (; x + 16 <= nx; x += 16) {
-    const __m128i s = _mm_loadu_si128(reinterpret_cast<const __m128i*>(st + x));
-    set_bits16(w, x, _mm_cmpeq_epi8(s, unknown));
-    set_bits16(c, x, _mm_cmpeq_epi8(s, free));
-  }
-#endif
-  for (; x < nx; ++x) {
-    w[x / 64] |= static_cast<std::uint64_t>(st[x] == kUnknown) << (x % 64);
-    c[x / 64] |= static_cast<std::uint64_t>(st[x] == kFree) << (x % 64);
-  }
+// The rule's candidates among the free voxels of a row: those whose own value is in the band
+// (u: the own states' unknown bits).
+void keep_candidates(word_t* c, const word_t* u, std::size_t words) {
   for (std::size_t i = 0; i < words; ++i) c[i] &= u[i];
 }
 
-#ifdef OCCSEG_GROWTH_AVX2
-// pack_row_bits() 32 voxels per step (self-contained: a call into the baseline SSE2 code from
-// here made the growth twice as slow).
-__attribute__((target("avx2"))) void pack_row_bits_avx2(const std::uint8_t* st, const word_t* u, std::size_t nx,
-                                                        word_t* w, word_t* c) {
-  const std::size_t words = (nx + 63) / 64;
-  std::fill(w, w + words, 0);
-  std::fill(c, c + words, 0);
-  const __m256i unknown = _mm256_set1_epi8(static_cast<char>(kUnknown)), free = _mm256_set1_epi8(static_cast<char>(kFree));
-  std::size_t x = 0;
-  for (; x + 32 <= nx; x += 32) {
-    const __m256i s = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(st + x));
-    set_bits32(w, x, _mm256_cmpeq_epi8(s, unknown));
-    set_bits32(c, x, _mm256_cmpeq_epi8(s, free));
+// One step of a scan along y or z: a row takes the rule from the row before it in scan order
+// (prev_w), in each of its 64-voxel lanes: a candidate after an unknown voxel becomes unknown.
+// Returns whether anything grew.
+bool grow_from(const word_t* prev_w, word_t* w, word_t* c, std::size_t words) {
+  std::uint64_t grown = 0;
+  for (std::size_t i = 0; i < words; ++i) {
+    const std::uint64_t g = prev_w[i] & c[i];
+    w[i] |= g;
+    c[i] &= ~g;
+    grown |= g;
   }
-  for (; x < nx; ++x) {
-    w[x / 64] |= static_cast<std::uint64_t>(st[x] == kUnknown) << (x % 64);
-    c[x / 64] |= static_cast<std::uint64_t>(st[x] == kFree) << (x % 64);
-  }
-  for (std::size_t i = 0; i < words; ++i) c[i] &= u[i];
-}
-#endif
-
-// st[x] = unknown where bit x of w is set (a grown candidate, or a voxel unknown already).
-void unpack_row(const word_t* w, std::size_t nx, std::uint8_t* st) {
-  std::size_t x = 0;
-#ifdef __SSE2__
-  const __m128i unknown = _mm_set1_epi8(static_cast<char>(kUnknown));
-  for (; x + 16 <= nx; x += 16) {
-    const __m128i set = bytes_of_bits16(w, x);
-    __m128i* p = reinterpret_cast<__m128i*>(st + x);
-    _mm_storeu_si128(p, _mm_or_si128(_mm_and_si128(set, unknown), _mm_andnot_si128(set, _mm_loadu_si128(p))));
-  }
-#endif
-  for (; x < nx; ++x)
-    if ((w[x / 64] >> (x % 64)) & 1u) st[x] = kUnknown;
+  return grown != 0;
 }
 
 // Scan x+ of one row: each run of candidates that starts right after an unknown voxel becomes
@@ -139,58 +92,7 @@ bool grow_down(word_t* w, word_t* c, std::size_t words) {
   return grown;
 }
 
-// One step of a scan along y or z: row `cur` takes the unknown voxels of the row before it in
-// scan order, 64 lanes at once.
-bool grow_from(const word_t* prev_w, word_t* w, word_t* c, std::size_t words) {
-  std::uint64_t grown = 0;
-  for (std::size_t i = 0; i < words; ++i) {
-    const std::uint64_t g = prev_w[i] & c[i];
-    w[i] |= g;
-    c[i] &= ~g;
-    grown |= g;
-  }
-  return grown != 0;
-}
-
-// Byte i of the result 0xFF where bit i of b (i < 8) is set, else 0.
-inline std::uint64_t spread_bits(std::uint64_t b) {
-  const std::uint64_t x = (b * 0x0101010101010101ull) & 0x8040201008040201ull;  // byte i: bit i
-  return (((x | (x + 0x7F7F7F7F7F7F7F7Full)) & 0x8080808080808080ull) >> 7) * 0xFF;
-}
-
-// Voxels [x0, nx) of a row (x0 a multiple of 8) from its cells' states cs (kMeanCell = 8 voxels
-// each) and its bits w (the growth's unknown voxels, every voxel of an unknown cell among them):
-// unknown where w has a bit, the cell's state elsewhere.
 static_assert(occseg::kMeanCell == 8, "a cell must be one byte of the growth's mask words");
-void write_row(const std::uint8_t* cs, const word_t* w, std::size_t x0, std::size_t nx, std::uint8_t* st) {
-  std::size_t cx = x0 / 8;
-  for (; (cx + 1) * 8 <= nx; ++cx) {
-    const std::uint64_t unknown = spread_bits((w[cx / 8] >> (8 * (cx % 8))) & 0xFF);
-    const std::uint64_t v = ((0x0101010101010101ull * cs[cx]) & ~unknown) | (0x0101010101010101ull * kUnknown & unknown);
-    std::memcpy(st + 8 * cx, &v, 8);
-  }
-  for (std::size_t x = 8 * cx; x < nx; ++x) st[x] = ((w[x / 64] >> (x % 64)) & 1u) ? kUnknown : cs[cx];
-}
-
-#ifdef OCCSEG_GROWTH_AVX2
-// write_row() 32 voxels (4 cells, read as one 4-byte word: all in the row) per step.
-__attribute__((target("avx2"))) void write_row_avx2(const std::uint8_t* cs, const word_t* w, std::size_t nx,
-                                                    std::uint8_t* st) {
-  // byte i of a 128-bit half takes cell i / 8 of the four (the low half cells 0, 1; the high 2, 3)
-  const __m256i pick = _mm256_setr_epi8(0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1, 1, 2, 2, 2, 2, 2, 2, 2, 2, 3, 3,
-                                        3, 3, 3, 3, 3, 3);
-  const __m256i unknown = _mm256_set1_epi8(static_cast<char>(kUnknown));
-  std::size_t x = 0;
-  for (; x + 32 <= nx; x += 32) {
-    std::uint32_t four;
-    std::memcpy(&four, cs + x / 8, 4);
-    const __m256i cells = _mm256_shuffle_epi8(_mm256_set1_epi32(static_cast<int>(four)), pick);
-    const __m256i v = _mm256_blendv_epi8(cells, unknown, bytes_of_bits32(w, x));
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(st + x), v);
-  }
-  write_row(cs, w, x, nx, st);
-}
-#endif
 
 }  // namespace
 
@@ -198,9 +100,10 @@ std::size_t grow_unknown_scratch_bytes(const Dims& d) {
   return 2 * d.ny * d.nz * ((d.nx + 63) / 64) * sizeof(std::uint64_t);
 }
 
-void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& d, int threads,
-                  std::uint8_t* scratch, std::size_t scratch_bytes, const std::uint64_t* unknown_bits,
-                  std::uint8_t* occupied_rows, bool packed, const std::uint8_t* cell_states) {
+void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& d, int threads, std::uint8_t* scratch,
+                  std::size_t scratch_bytes, const std::uint64_t* unknown_bits, std::uint8_t* occupied_rows,
+                  bool packed, const std::uint8_t* cell_states, const kernels::Table& k) {
+  const kernels::RefineKernels& kr = k.refine;
   const word_t* const ubits = reinterpret_cast<const word_t*>(unknown_bits);
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, rows = ny * nz, words = (nx + 63) / 64;
   std::vector<std::uint64_t> own_words;
@@ -220,9 +123,6 @@ void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& d, 
   auto row_c = [&](std::size_t r) { return C + r * words; };
 
   // x and y, plane by plane (z fixed): the lines of both lie in the plane.
-#ifdef OCCSEG_GROWTH_AVX2
-  const bool avx2 = cpu_has_avx2();
-#endif
   parallel_for_dynamic(nz, threads, [&](std::size_t z0, std::size_t z1) {
     ThreadScratch<std::uint64_t> own_words(ubits || packed ? 0 : words);
     word_t* const own_u = reinterpret_cast<word_t*>(own_words.data());
@@ -233,13 +133,10 @@ void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& d, 
         if (!packed) {
           // The own states' unknown voxels as bits: handed in (own is not read), or packed here.
           const word_t* u = ubits ? ubits + words * r : own_u;
-          if (!ubits) pack_equal(own + nx * r, nx, kUnknown, own_u);
-#ifdef OCCSEG_GROWTH_AVX2
-          if (avx2) pack_row_bits_avx2(st + nx * r, u, nx, row_w(r), row_c(r));
-          else
-#endif
-            pack_row_bits(st + nx * r, u, nx, row_w(r), row_c(r));
-          if (occupied_rows) occupied_rows[r] = any_occupied(st + nx * r, nx);  // in L1 now
+          if (!ubits) kr.pack_equal(own + nx * r, nx, kUnknown, own_u);
+          kr.pack_states(st + nx * r, nx, row_w(r), row_c(r));  // C: the free voxels, for now
+          keep_candidates(row_c(r), u, words);
+          if (occupied_rows) occupied_rows[r] = kr.any_occupied(st + nx * r, nx);  // in L1 now
         }
         bool g = grow_up(row_w(r), row_c(r), words);
         g = grow_down(row_w(r), row_c(r), words) || g;
@@ -262,26 +159,16 @@ void grow_unknown(std::uint8_t* states, const std::uint8_t* own, const Dims& d, 
   });
   if (cell_states && packed) {  // every row, written once (the creation left them)
     const std::size_t ncx = (nx + 7) / 8, ncy = (ny + 7) / 8;
-#ifdef OCCSEG_GROWTH_AVX2
-    // (following set_texture_kernel(), so that the tests run both)
-    const bool avx2_rows = avx2 && texture_kernel() >= TextureKernel::avx2;
-#endif
     parallel_for_dynamic(rows, threads, [&](std::size_t r0, std::size_t r1) {
-      for (std::size_t r = r0; r < r1; ++r) {
-        const std::uint8_t* cs = cell_states + ncx * (r % ny / 8 + ncy * (r / ny / 8));
-#ifdef OCCSEG_GROWTH_AVX2
-        if (avx2_rows) write_row_avx2(cs, row_w(r), nx, st + nx * r);
-        else
-#endif
-          write_row(cs, row_w(r), 0, nx, st + nx * r);
-      }
+      for (std::size_t r = r0; r < r1; ++r)
+        kr.write_cells_row(cell_states + ncx * (r % ny / 8 + ncy * (r / ny / 8)), row_w(r), nx, st + nx * r);
     });
     return;
   }
   // Back into the states, rows that grew only.
   parallel_for_dynamic(rows, threads, [&](std::size_t r0, std::size_t r1) {
     for (std::size_t r = r0; r < r1; ++r)
-      if (grew[r]) unpack_row(row_w(r), nx, st + nx * r);
+      if (grew[r]) kr.unpack_unknown(row_w(r), nx, st + nx * r);
   });
 }
 
