@@ -78,7 +78,7 @@ assert code == 0 and text == "", (code, text)
 now = {"OCCSEG_PROGRESS_DELAY": "0"}
 code, text = in_terminal(job + ["--out", "seg_int"], interrupt=b"\x03", when="segmenting: ", env=now)
 assert code == 130, (code, text)
-assert "occseg: interrupted: stopped, and the output files written so far were removed" in text, text
+assert "occseg: interrupted: stopped; no output file was changed" in text, text
 assert not os.path.exists(os.path.join(work, "seg_int")), os.listdir(os.path.join(work, "seg_int"))
 
 # The same into an existing directory: it stays, and so does what was in it before.
