@@ -112,35 +112,39 @@ int run(const DemoArgs& o) {
   t = std::chrono::steady_clock::now();
   const std::string preset = preset_name(params.preset);
   const std::string method = "segmentation (preset " + preset + ")";
-  std::vector<std::pair<std::string, std::function<void(const std::string&, StagedFiles&)>>> files;
-  files.emplace_back("segmentation.png", [&](const std::string& f, StagedFiles& staged) {
-    const Dims& d = map.dims;
-    write_segmentation_png(f,
-                           "occseg demo: " + scene.name + " (" + sim::scan_mode_name(config.mode) + ", " +
-                               std::to_string(d.nx) + " x " + std::to_string(d.ny) + " x " + std::to_string(d.nz) +
-                               ", seed " + std::to_string(o.seed) + ", preset " + preset + ")",
-                           map, r, &truth.state, &staged);
-  });
-  files.emplace_back("labels.npy",
-                     [&](const std::string& f, StagedFiles& s) { write_labels_npy(f, r.dims, r.labels, &s); });
-  files.emplace_back("labels.nrrd",
-                     [&](const std::string& f, StagedFiles& s) { write_labels_nrrd(f, map, r.labels, &s); });
-  files.emplace_back("segments.json", [&](const std::string& f, StagedFiles& s) {
-    write_file_atomically(f, [&](std::ostream& os) { write_segments_json(os, r, preset); }, &s);
-  });
-  files.emplace_back("evaluation.json", [&](const std::string& f, StagedFiles& staged) {
-    const nlohmann::json j{{"scene", scene.name},
-                           {"method", method},
-                           {"reach", 3},
-                           {"scores", scores_json(scores, scene.objects)}};
-    const std::string text = j.dump(1) + "\n";
-    write_file_atomically(f, [&](std::ostream& s) { s << text; }, &staged);
-  });
-  files.emplace_back("evaluation.txt", [&](const std::string& f, StagedFiles& staged) {
-    const std::string text = "scene " + scene.name + ", scored against the ideal state (truth_state.npy)\n" +
-                             scores_table({method}, {scores}, scene.objects);
-    write_file_atomically(f, [&](std::ostream& s) { s << text; }, &staged);
-  });
+  using Writer = std::function<void(const std::string&, StagedFiles&)>;
+  const std::vector<std::pair<std::string, Writer>> files{
+      {"segmentation.png",
+       [&](const std::string& f, StagedFiles& staged) {
+         const Dims& d = map.dims;
+         write_segmentation_png(f,
+                                "occseg demo: " + scene.name + " (" + sim::scan_mode_name(config.mode) + ", " +
+                                    std::to_string(d.nx) + " x " + std::to_string(d.ny) + " x " +
+                                    std::to_string(d.nz) + ", seed " + std::to_string(o.seed) + ", preset " + preset +
+                                    ")",
+                                map, r, &truth.state, &staged);
+       }},
+      {"labels.npy", [&](const std::string& f, StagedFiles& s) { write_labels_npy(f, r.dims, r.labels, &s); }},
+      {"labels.nrrd", [&](const std::string& f, StagedFiles& s) { write_labels_nrrd(f, map, r.labels, &s); }},
+      {"segments.json",
+       [&](const std::string& f, StagedFiles& s) {
+         write_file_atomically(f, [&](std::ostream& os) { write_segments_json(os, r, preset); }, &s);
+       }},
+      {"evaluation.json",
+       [&](const std::string& f, StagedFiles& staged) {
+         const nlohmann::json j{{"scene", scene.name},
+                                {"method", method},
+                                {"reach", 3},
+                                {"scores", scores_json(scores, scene.objects)}};
+         const std::string text = j.dump(1) + "\n";
+         write_file_atomically(f, [&](std::ostream& s) { s << text; }, &staged);
+       }},
+      {"evaluation.txt",
+       [&](const std::string& f, StagedFiles& staged) {
+         const std::string text = "scene " + scene.name + ", scored against the ideal state (truth_state.npy)\n" +
+                                  scores_table({method}, {scores}, scene.objects);
+         write_file_atomically(f, [&](std::ostream& s) { s << text; }, &staged);
+       }}};
   // map.npy, truth_state.npy, truth_objects.npy, scene.json: as `occseg simulate` writes them.
   bar.update("writing map and ground truth", 0);
   out.write({"map.npy", "truth_state.npy", "truth_objects.npy", "scene.json"},

@@ -81,9 +81,12 @@ int out_of_memory_exit() {
 // disk, a closed pipe) fails the command with exit 2, as a file that could not be written does.
 // std::cout writes through `out` (so the reason of a failed write is kept), which this restores.
 int finish_stdout(int rc, FdOutBuf& out, std::streambuf* original) {
+  // What a library printed through C stdio goes first, as it was printed first.
+  errno = 0;
+  int err = std::fflush(stdout) == 0 && !std::ferror(stdout) ? 0 : (errno ? errno : EIO);
   std::cout.flush();
   std::cout.rdbuf(original);
-  int err = out.flush_all() ? 0 : (out.error() ? out.error() : EIO);
+  if (!out.flush_all() && !err) err = out.error() ? out.error() : EIO;
   // Closing tells of errors that some file systems (NFS) report only then. Nothing writes to
   // stdout after this; one that was closed from the start (EBADF) with nothing written is fine.
   if (!err && ::close(STDOUT_FILENO) != 0 && errno != EBADF) err = errno;
