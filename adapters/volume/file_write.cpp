@@ -111,7 +111,7 @@ void fsync_dir(const std::string& dir) {
 
 }  // namespace
 
-FdOutBuf::FdOutBuf(int fd) : fd_(fd) { setp(buf_, buf_ + sizeof buf_); }
+FdOutBuf::FdOutBuf(int fd) : fd_(fd), buf_(new char[kSize]) { setp(buf_.get(), buf_.get() + kSize); }
 
 bool FdOutBuf::flush_all() { return drain() && error_ == 0; }
 
@@ -140,8 +140,8 @@ int FdOutBuf::sync() { return flush_all() ? 0 : -1; }
 bool FdOutBuf::drain() {
   if (error_) return false;
   const std::size_t n = static_cast<std::size_t>(pptr() - pbase());
-  setp(buf_, buf_ + sizeof buf_);
-  return put(buf_, n);
+  setp(buf_.get(), buf_.get() + kSize);
+  return put(buf_.get(), n);
 }
 
 bool FdOutBuf::put(const char* s, std::size_t n) {

@@ -65,8 +65,9 @@ void write_segments_json(std::ostream& out, const Result& r, const std::string& 
   const char* end = line + sizeof line;
   for (const Segment& s : r.segments) {
     char* p = line;
-    p += std::snprintf(p, static_cast<std::size_t>(end - p), "%s  {\"id\": %u, \"state\": \"%s\", \"voxels\": %llu, \"mop\": ",
-                       sep, static_cast<unsigned>(s.id), state_name(s.state), static_cast<unsigned long long>(s.voxels));
+    p += std::snprintf(p, static_cast<std::size_t>(end - p),
+                       "%s  {\"id\": %u, \"state\": \"%s\", \"voxels\": %llu, \"mop\": ", sep,
+                       static_cast<unsigned>(s.id), state_name(s.state), static_cast<unsigned long long>(s.voxels));
     number(p, end, s.mop);
     p += std::snprintf(p, static_cast<std::size_t>(end - p), ", \"bbox\": {\"min\": ");
     triple(p, end, s.bbox_min);

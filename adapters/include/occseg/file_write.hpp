@@ -15,6 +15,7 @@
 // process. This code never changes signal dispositions.
 #pragma once
 #include <functional>
+#include <memory>
 #include <ostream>
 #include <streambuf>
 #include <string>
@@ -43,9 +44,10 @@ class FdOutBuf : public std::streambuf {
  private:
   bool drain();
   bool put(const char* s, std::size_t n);
+  static constexpr std::size_t kSize = 1 << 16;
   int fd_;
   int error_ = 0;
-  char buf_[1 << 16];
+  std::unique_ptr<char[]> buf_;  // on the heap: callers' threads may have small stacks
 };
 
 // A set of files that replace their old versions together. stage() writes each new file to its
