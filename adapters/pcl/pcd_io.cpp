@@ -178,7 +178,8 @@ Grid read_pcd(const std::string& path, const ScanOptions& options) {
   }
 }
 
-void write_segments_pcd(const std::string& path, const Grid& grid, const Result& result, StateSet states) {
+void write_segments_pcd(const std::string& path, const Grid& grid, const Result& result, StateSet states,
+                        StagedFiles* into) {
   const pcl::PointCloud<pcl::PointXYZL> cloud = labelled_cloud(grid, result, states);
   // Written by hand rather than with pcl::PCDWriter: PCL refuses empty clouds, and this goes
   // through write_file_atomically. Fields are packed (16 bytes a point), as DATA binary wants.
@@ -199,7 +200,7 @@ void write_segments_pcd(const std::string& path, const Grid& grid, const Result&
   write_file_atomically(path, [&](std::ostream& out) {
     out.write(header.data(), static_cast<std::streamsize>(header.size()));
     out.write(body.data(), static_cast<std::streamsize>(body.size()));
-  });
+  }, into);
 }
 
 }  // namespace occseg

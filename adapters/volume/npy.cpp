@@ -107,7 +107,7 @@ NpyArray read_npy(const std::string& path) {
 }
 
 void write_npy(const std::string& path, const std::string& descr, const std::vector<std::size_t>& shape,
-               const void* data, std::size_t bytes) {
+               const void* data, std::size_t bytes, StagedFiles* into) {
   std::ostringstream h;
   h << "{'descr': '" << descr << "', 'fortran_order': False, 'shape': (";
   for (std::size_t i = 0; i < shape.size(); ++i) h << shape[i] << (shape.size() == 1 || i + 1 < shape.size() ? "," : "") << (i + 1 < shape.size() ? " " : "");
@@ -125,7 +125,7 @@ void write_npy(const std::string& path, const std::string& descr, const std::vec
     o.write(reinterpret_cast<const char*>(pre), 10);
     o.write(hs.data(), static_cast<std::streamsize>(hs.size()));
     o.write(static_cast<const char*>(data), static_cast<std::streamsize>(bytes));
-  });
+  }, into);
 }
 
 Grid grid_from_npy(const NpyArray& a, double voxel_size, const std::string& name) {
@@ -171,8 +171,8 @@ Grid grid_from_npy(const NpyArray& a, double voxel_size, const std::string& name
   return g;
 }
 
-void write_grid_npy(const std::string& path, const Grid& g) {
-  write_npy(path, "<f4", {g.dims.nz, g.dims.ny, g.dims.nx}, g.p.data(), g.p.size() * sizeof(float));
+void write_grid_npy(const std::string& path, const Grid& g, StagedFiles* into) {
+  write_npy(path, "<f4", {g.dims.nz, g.dims.ny, g.dims.nx}, g.p.data(), g.p.size() * sizeof(float), into);
 }
 
 void write_grid_npy_as(const std::string& path, const Grid& g, const std::string& descr) {
@@ -196,8 +196,8 @@ void write_grid_npy_as(const std::string& path, const Grid& g, const std::string
   throw Error(Status::invalid_argument, "cannot write a map as dtype '" + descr + "' (use <f4, <f8, |u1 or <u2)");
 }
 
-void write_labels_npy(const std::string& path, const Dims& d, const LabelArray& labels) {
-  write_npy(path, "<u4", {d.nz, d.ny, d.nx}, labels.data(), labels.size() * sizeof(std::uint32_t));
+void write_labels_npy(const std::string& path, const Dims& d, const LabelArray& labels, StagedFiles* into) {
+  write_npy(path, "<u4", {d.nz, d.ny, d.nx}, labels.data(), labels.size() * sizeof(std::uint32_t), into);
 }
 
 }  // namespace occseg

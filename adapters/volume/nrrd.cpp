@@ -280,7 +280,8 @@ Grid grid_from_nrrd(const NrrdVolume& v, const std::string& name) {
 }
 
 void write_nrrd(const std::string& path, NrrdType type, const Dims& dims, double voxel_size,
-                const std::array<double, 3>& corner, const void* data, std::size_t bytes, const std::string& content) {
+                const std::array<double, 3>& corner, const void* data, std::size_t bytes, const std::string& content,
+                StagedFiles* into) {
   check_dims(dims);
   if (bytes != dims.count() * type_size(type))
     throw Error(Status::invalid_argument, "write_nrrd: " + std::to_string(bytes) + " bytes do not match the dims");
@@ -298,19 +299,19 @@ void write_nrrd(const std::string& path, NrrdType type, const Dims& dims, double
   write_file_atomically(path, [&](std::ostream& out) {
     out.write(header.data(), static_cast<std::streamsize>(header.size()));
     out.write(static_cast<const char*>(data), static_cast<std::streamsize>(bytes));
-  });
+  }, into);
 }
 
-void write_grid_nrrd(const std::string& path, const Grid& g) {
+void write_grid_nrrd(const std::string& path, const Grid& g, StagedFiles* into) {
   write_nrrd(path, NrrdType::f32, g.dims, g.voxel_size, g.origin, g.p.data(), g.p.size() * sizeof(float),
-             "occupancy probability");
+             "occupancy probability", into);
 }
 
-void write_labels_nrrd(const std::string& path, const Grid& g, const LabelArray& labels) {
+void write_labels_nrrd(const std::string& path, const Grid& g, const LabelArray& labels, StagedFiles* into) {
   if (labels.size() != g.dims.count())
     throw Error(Status::invalid_argument, "write_labels_nrrd: " + std::to_string(labels.size()) +
                                               " labels for " + std::to_string(g.dims.count()) + " voxels");
-  write_nrrd(path, NrrdType::u32, g.dims, g.voxel_size, g.origin, labels.data(), labels.size() * 4, "segment labels");
+  write_nrrd(path, NrrdType::u32, g.dims, g.voxel_size, g.origin, labels.data(), labels.size() * 4, "segment labels", into);
 }
 
 }  // namespace occseg

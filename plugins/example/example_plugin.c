@@ -6,11 +6,18 @@
  *   - similarity "l1": half the L1 distance between the normalised histograms (0 .. 1);
  *   - reader and writer ".occtxt": a small text format ("occtxt nx ny nz voxel ox oy oz" then
  *     the probabilities, x fastest).
+ * Linux: the writer uses POSIX open/fsync and getrandom.
  */
+#define _GNU_SOURCE /* getrandom, O_CLOEXEC, O_NOFOLLOW */
+#include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/random.h>
+#include <time.h>
+#include <unistd.h>
 
 #include <occseg/occseg_plugin.h>
 
@@ -146,19 +153,46 @@ static int occtxt_read(const occseg_plugin_call *call, const char *path, const c
   return 0;
 }
 
+/* A new temporary beside `path` (so the rename stays in one file system): a random name, created
+ * with O_EXCL | O_NOFOLLOW, so a file or symbolic link planted under the name is never opened (a
+ * predictable name in a shared folder would let a planted link redirect the write elsewhere),
+ * and mode 0666 less the umask, like any new file. Returns the descriptor, or -1 with errno. */
+static int create_temp(const char *path, char *tmp, size_t size) {
+  int attempt;
+  for (attempt = 0; attempt < 100; ++attempt) {
+    unsigned long long r = 0;
+    int fd;
+    if (getrandom(&r, sizeof r, GRND_NONBLOCK) != (ssize_t)sizeof r)
+      r ^= ((unsigned long long)getpid() << 32) ^ (unsigned long long)time(NULL) ^
+           (unsigned long long)(attempt + 1) * 0x9E3779B97F4A7C15ull;
+    if (snprintf(tmp, size, "%s.tmp-%016llx", path, r) >= (int)size) {
+      errno = ENAMETOOLONG;
+      return -1;
+    }
+    fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+    if (fd >= 0 || errno != EEXIST) return fd;
+  }
+  return -1;
+}
+
 static int occtxt_write(const occseg_plugin_call *call, const char *path, const occseg_plugin_grid *g,
                         const char *const *options) {
   const size_t n = g->dims[0] * g->dims[1] * g->dims[2];
   char tmp[4096];
   size_t i;
-  int ok;
+  int ok, fd;
   FILE *f;
   if (options && options[0]) return io_fail(call, OCCSEG_EINVAL, "the .occtxt writer takes no options", path);
-  if (snprintf(tmp, sizeof tmp, "%s.tmp", path) >= (int)sizeof tmp) return io_fail(call, OCCSEG_EIO, "path too long", path);
-  if (!(f = fopen(tmp, "w"))) return io_fail(call, OCCSEG_EIO, "cannot create", path);
+  if ((fd = create_temp(path, tmp, sizeof tmp)) < 0) return io_fail(call, OCCSEG_EIO, "cannot create a temporary", path);
+  if (!(f = fdopen(fd, "w"))) {
+    close(fd);
+    remove(tmp);
+    return io_fail(call, OCCSEG_EIO, "cannot create", path);
+  }
   ok = fprintf(f, "occtxt %zu %zu %zu %.17g %.17g %.17g %.17g\n", g->dims[0], g->dims[1], g->dims[2],
                g->voxel_size, g->origin[0], g->origin[1], g->origin[2]) > 0;
   for (i = 0; ok && i < n; ++i) ok = fprintf(f, "%.9g\n", g->values[i]) > 0;
+  ok = fflush(f) == 0 && fsync(fd) == 0 && ok; /* on disk before it replaces the old file */
   ok = (fclose(f) == 0) && ok;
   if (!ok || rename(tmp, path) != 0) { /* all or nothing */
     remove(tmp);

@@ -1,7 +1,7 @@
 """`occseg` in a terminal session (a pseudo-terminal, as a user's shell gives it): a long job
 draws a progress bar on stderr; without a terminal, or with --quiet, there is none; Ctrl-C (the
 terminal's interrupt character) and SIGTERM stop the job with exit code 130 / 143 and leave no
-output file behind."""
+output file behind, and the files of an earlier run as they were."""
 import glob
 import os
 import pty
@@ -78,7 +78,7 @@ assert code == 0 and text == "", (code, text)
 now = {"OCCSEG_PROGRESS_DELAY": "0"}
 code, text = in_terminal(job + ["--out", "seg_int"], interrupt=b"\x03", when="segmenting: ", env=now)
 assert code == 130, (code, text)
-assert "occseg: interrupted: stopped, and the output files written so far were removed" in text, text
+assert "occseg: interrupted: stopped; no output file was changed" in text, text
 assert not os.path.exists(os.path.join(work, "seg_int")), os.listdir(os.path.join(work, "seg_int"))
 
 # The same into an existing directory: it stays, and so does what was in it before.
@@ -87,6 +87,25 @@ with open(os.path.join(work, "keep", "notes.txt"), "w") as f:
     f.write("mine\n")
 code, text = in_terminal(job + ["--out", "keep"], interrupt=b"\x03", when="segmenting: ", env=now)
 assert code == 130 and os.listdir(os.path.join(work, "keep")) == ["notes.txt"], (code, os.listdir(os.path.join(work, "keep")))
+
+# Ctrl-C during a re-run into the folder of the first run, while the new files are being
+# written (labels.npy is complete then): the first run's files stay exactly as they were. Should
+# the signal come only once every file is in place, the run ends normally with the whole new set.
+def files_of(d):
+    p = os.path.join(work, d)
+    return {f: open(os.path.join(p, f), "rb").read() for f in sorted(os.listdir(p))}
+
+
+first = files_of("seg")
+rerun = job + ["--preset", "paper"]
+code, text = in_terminal(rerun + ["--out", "seg"], interrupt=b"\x03", when="writing labels.nrrd", env=now)
+if code == 130:
+    assert files_of("seg") == first, f"the first run's files changed: {sorted(files_of('seg'))}"
+else:
+    assert code == 0, (code, text)
+    r = subprocess.run([occseg, *rerun, "--out", "seg_paper"], cwd=work, capture_output=True, text=True)
+    assert r.returncode == 0 and files_of("seg") == files_of("seg_paper"), r.stderr
+assert not glob.glob(os.path.join(work, "seg", "*.tmp-*"))
 
 # Fusing a point cloud reports through ScanOptions::progress: with the bar shown from the start
 # (OCCSEG_PROGRESS_DELAY=0), "fusing scans" appears after the first 65536 of its 254456 rays, and

@@ -1,10 +1,16 @@
 // Output that cannot be written: an unwritable directory, a missing parent, a full disk or
-// quota (RLIMIT_FSIZE). Each is OCCSEG_EIO naming the file, and leaves no partial file, no
-// temporary file and no mismatched labels.npy / segments.json pair; the same for the command.
+// quota (RLIMIT_FSIZE), a rename that fails. Each is OCCSEG_EIO naming the file, and leaves no
+// partial file, no temporary file and no mismatched labels.npy / segments.json pair, and a
+// failed rewrite leaves the earlier files exactly as they were; the same for the command.
+// Temporaries never follow a planted symbolic link.
 #include <fcntl.h>
+#include <linux/fs.h>
 #include <signal.h>
+#include <sys/ioctl.h>
+#include <sys/stat.h>
 
 #include <cstring>
+#include <map>
 
 #include "occseg/error.hpp"
 #include "occseg/file_write.hpp"
@@ -153,4 +159,159 @@ TEST(Output, TheCommandLeavesNothingWhenTheDiskFillsOrTheDirectoryIsUnwritable) 
   if (rc == 96) GTEST_SKIP() << "an unprivileged user cannot reach " << OCCSEG_CLI;
   EXPECT_EQ(rc, 2);
   EXPECT_FALSE(fs::exists(locked + "/out"));
+}
+
+namespace {
+
+// Writes as a new-file-creating program would see it: the permission bits of `path`.
+unsigned mode_of(const std::string& path) {
+  struct stat st {};
+  return ::lstat(path.c_str(), &st) == 0 ? static_cast<unsigned>(st.st_mode & 07777) : 0u;
+}
+
+bool is_regular(const std::string& path) {
+  struct stat st {};
+  return ::lstat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+
+// Sets or clears the immutable attribute (as chattr +i / -i); false where this file system or
+// this user cannot (it needs CAP_LINUX_IMMUTABLE).
+bool set_immutable(const std::string& path, bool on) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return false;
+  int flags = 0;
+  bool ok = ::ioctl(fd, FS_IOC_GETFLAGS, &flags) == 0;
+  flags = on ? (flags | FS_IMMUTABLE_FL) : (flags & ~FS_IMMUTABLE_FL);
+  ok = ok && ::ioctl(fd, FS_IOC_SETFLAGS, &flags) == 0;
+  ::close(fd);
+  return ok;
+}
+
+// Runs the command `occseg segment IN --out OUT` in a child limited to `bytes` per written
+// file, with SIGXFSZ at its default action (as a shell's `ulimit -f` leaves it), stderr to
+// `err`. Returns the exit status (128 + signal when a signal ended it).
+int run_cli_sigxfsz_default(const std::string& in, const std::string& out, rlim_t bytes, const std::string& err) {
+  return in_child([&] {
+    ::signal(SIGXFSZ, SIG_DFL);
+    const rlimit r{bytes, bytes};
+    if (::setrlimit(RLIMIT_FSIZE, &r) != 0) return 90;
+    const int null = ::open("/dev/null", O_WRONLY);
+    const int e = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(null, 1);
+    ::dup2(e, 2);
+    ::execl(OCCSEG_CLI, OCCSEG_CLI, "segment", in.c_str(), "--out", out.c_str(), static_cast<char*>(nullptr));
+    return 97;
+  });
+}
+
+std::map<std::string, std::string> contents(const std::string& dir) {
+  std::map<std::string, std::string> m;
+  for (const std::string& f : entries(dir)) m[f] = slurp(dir + "/" + f);
+  return m;
+}
+
+}  // namespace
+
+// A rewrite that fails (here: a file-size limit) leaves the earlier pair exactly as it was:
+// until both new files are complete, no old file is touched.
+TEST(Output, AFailedRewriteOfTheResultKeepsTheOldPairWhole) {
+  Segmented first(16), second(20);  // second: labels.npy 32128 bytes, segments.json > 100 kB
+  const std::string dir = scratch("rewrite");
+  ASSERT_EQ(occseg_result_write(first.result, dir.c_str()), OCCSEG_OK);
+  const auto old = contents(dir);
+  ASSERT_EQ(old.size(), 2u);
+  for (rlim_t limit : {rlim_t(4096), rlim_t(40000)}) {  // within labels.npy, within segments.json
+    const char* failing = limit == 4096 ? "labels.npy" : "segments.json";
+    EXPECT_EQ(limited(limit, false, [&] { return expect_eio(occseg_result_write(second.result, dir.c_str()), failing); }),
+              0)
+        << limit;
+    EXPECT_TRUE(contents(dir) == old) << limit << ": the old pair changed; left: " << entries(dir).size() << " files";
+  }
+  ASSERT_EQ(occseg_result_write(second.result, dir.c_str()), OCCSEG_OK);  // and without a limit, it is replaced
+  EXPECT_EQ(entries(dir), (std::vector<std::string>{"labels.npy", "segments.json"}));
+  EXPECT_NE(slurp(dir + "/labels.npy"), old.at("labels.npy"));
+}
+
+// A symbolic link planted in a shared output folder under a name the writer might pick as its
+// temporary must never be followed: the file it points to stays as it was. The names planted
+// are those that a predictable scheme (PATH.tmp-PID-N, the scheme of an earlier version) gives.
+// The new files get the mode of any newly created file, 0666 less the umask.
+TEST(Output, TemporariesNeverFollowAPlantedLinkAndGetTheModeOfANewFile) {
+  Segmented s(8);
+  const std::string dir = scratch("planted");
+  const std::string victim = scratch("planted_elsewhere") + "/victim";
+  put(victim, "precious");
+  const int rc = in_child([&] {
+    for (const char* name : {"out.bin", "labels.npy", "segments.json"})
+      for (int n = 0; n < 1024; ++n) {
+        const std::string link = dir + "/" + name + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(n);
+        if (::symlink(victim.c_str(), link.c_str()) != 0) return 20;
+      }
+    ::umask(027);
+    occseg::write_file_atomically(dir + "/out.bin", [](std::ostream& o) { o << "new"; });
+    return occseg_result_write(s.result, dir.c_str()) == OCCSEG_OK ? 0 : 21;
+  });
+  ASSERT_EQ(rc, 0);
+  EXPECT_EQ(slurp(victim), "precious");
+  for (const char* name : {"out.bin", "labels.npy", "segments.json"}) {
+    EXPECT_TRUE(is_regular(dir + "/" + name)) << name << " is not a regular file (a link renamed into place?)";
+    EXPECT_EQ(mode_of(dir + "/" + name), 0640u) << name;
+  }
+  EXPECT_EQ(slurp(dir + "/out.bin"), "new");
+  EXPECT_EQ(entries(dir).size(), 3u + 3u * 1024u);  // the planted links, untouched, and nothing else
+}
+
+// A rename that fails in the middle of the final step (here: the old segments.json is
+// immutable, so it cannot be replaced) puts back the files replaced before it.
+TEST(Output, ARenameThatFailsHalfwayPutsTheOldFilesBack) {
+  Segmented first(16), second(20);
+  const std::string dir = scratch("halfway");
+  ASSERT_EQ(occseg_result_write(first.result, dir.c_str()), OCCSEG_OK);
+  const auto old = contents(dir);
+  if (!set_immutable(dir + "/segments.json", true)) GTEST_SKIP() << "cannot make a file immutable here";
+  const int rc = occseg_result_write(second.result, dir.c_str());
+  const std::string message = occseg_last_error();
+  set_immutable(dir + "/segments.json", false);
+  EXPECT_EQ(rc, OCCSEG_EIO);
+  EXPECT_NE(message.find("segments.json"), std::string::npos) << message;
+  EXPECT_TRUE(contents(dir) == old) << "left: " << entries(dir).size() << " files; labels.npy "
+                                    << (slurp(dir + "/labels.npy") == old.at("labels.npy") ? "old" : "not the old one");
+  // The same through the helper: a new file added before the failing one is taken away again.
+  {
+    ASSERT_TRUE(set_immutable(dir + "/segments.json", true));
+    occseg::StagedFiles files;
+    files.stage(dir + "/labels.npy", [](std::ostream& o) { o << "new labels"; });
+    files.stage(dir + "/added.txt", [](std::ostream& o) { o << "new file"; });
+    files.stage(dir + "/segments.json", [](std::ostream& o) { o << "new json"; });
+    EXPECT_THROW(files.commit(), occseg::Error);
+    set_immutable(dir + "/segments.json", false);
+  }
+  EXPECT_TRUE(contents(dir) == old) << "left: " << entries(dir).size() << " files";
+}
+
+// Under a file-size limit (ulimit -f) with SIGXFSZ at its default action, as a shell leaves it,
+// the command reports a write error naming the file (exit 2) instead of being killed by the
+// signal (exit 153), and a failed re-run leaves the earlier run's files exactly as they were.
+TEST(Output, TheCommandReportsAFileSizeLimitAndKeepsTheEarlierRun) {
+  Segmented a(24), b(26);  // b: labels.npy and labels.nrrd of 70 kB, segments.json of over 300 kB
+  const std::string dir = scratch("cli_rerun");
+  const std::string in_a = dir + "/a.npy", in_b = dir + "/b.npy", out = dir + "/out", err = dir + "/err.txt";
+  ASSERT_EQ(occseg_map_write(a.map, in_a.c_str()), OCCSEG_OK);
+  ASSERT_EQ(occseg_map_write(b.map, in_b.c_str()), OCCSEG_OK);
+  ASSERT_EQ(run_cli_sigxfsz_default(in_a, out, RLIM_INFINITY, err), 0) << slurp(err);
+  const auto old = contents(out);
+  ASSERT_GE(old.size(), 4u);
+  // Fail at the first file (labels.npy), the second (labels.nrrd: the same data after a longer
+  // header), a later one (segments.json).
+  const std::size_t npy = 128 + 4 * 26 * 26 * 26, nrrd = old.at("labels.nrrd").size() - 4 * 24 * 24 * 24 + 4 * 26 * 26 * 26;
+  ASSERT_GT(nrrd, npy + 2);
+  for (rlim_t limit : {rlim_t(1000), rlim_t((npy + nrrd) / 2), rlim_t(nrrd + 1000)}) {
+    EXPECT_EQ(run_cli_sigxfsz_default(in_b, out, limit, err), 2) << limit;
+    const std::string message = slurp(err);
+    EXPECT_NE(message.find("occseg: error: cannot write '" + out + "/"), std::string::npos) << message;
+    EXPECT_NE(message.find("File too large"), std::string::npos) << message;
+    EXPECT_TRUE(contents(out) == old) << limit << ": the earlier run's files changed; now " << entries(out).size();
+  }
+  EXPECT_EQ(run_cli_sigxfsz_default(in_b, out, RLIM_INFINITY, err), 0) << slurp(err);
+  EXPECT_NE(slurp(out + "/labels.npy"), old.at("labels.npy"));
 }

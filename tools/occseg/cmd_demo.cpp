@@ -5,6 +5,7 @@
 #include <chrono>
 #include <iostream>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,7 @@
 #include "occseg/npy.hpp"
 #include "occseg/nrrd.hpp"
 #include "occseg/segment.hpp"
+#include "occseg/segments_json.hpp"
 #include "occseg/sim/metrics.hpp"
 #include "occseg/sim/scanner.hpp"
 #include "occseg/sim/truth.hpp"
@@ -21,7 +23,6 @@
 #include "outputs.hpp"
 #include "progress.hpp"
 #include "report.hpp"
-#include "segments_json.hpp"
 #include "sim_io.hpp"
 
 namespace occseg::cli {
@@ -51,6 +52,29 @@ std::string num(double v) {
   char b[32];
   std::snprintf(b, sizeof b, "%.3f", v);
   return b;
+}
+
+// What the demo prints without --json: the summary, the scores and the files, explained.
+void print_demo_summary(std::ostream& os, RunReport rep, const sim::Scene& scene, const sim::Scores& scores,
+                        const std::string& dir, double voxel_size) {
+  rep.files.clear();  // listed with explanations below
+  os << "occseg demo: the paper's " << scene.name << " scene, simulated, segmented and scored\n";
+  print_summary(os, rep);
+  os << "scores against the ground truth: voxel accuracy " << pct(scores.accuracy) << ", IoU free "
+     << num(scores.iou[0]) << ", unknown " << num(scores.iou[1]) << ", occupied " << num(scores.iou[2])
+     << "; object voxels labelled free " << pct(scores.object_free_share) << ", unknown voxels labelled free "
+     << pct(scores.unknown_free_share) << "\n";
+  const std::string d = dir + "/";
+  os << "\nLook at " << d << "segmentation.png first. Everything is in " << d << ":\n"
+     << "  segmentation.png   slices through the map, the segments and the ideal state\n"
+     << "  segments.json      the segment table: state, voxels, mean probability, box, centroid\n"
+     << "  labels.npy         segment id per voxel, uint32 [z, y, x]; labels.nrrd for ParaView/3D Slicer\n"
+     << "  map.npy            the simulated map, float32 [z, y, x]: try `occseg segment " << d
+     << "map.npy --voxel-size " << voxel_size << " --out seg`\n"
+     << "  truth_state.npy    the ideal state per voxel; truth_objects.npy, scene.json: the scene\n"
+     << "  evaluation.txt     scores against the ground truth (evaluation.json: the same as JSON)\n"
+     << "  summary.json       this summary as JSON\n"
+     << "Next: occseg segment YOUR_MAP --out DIR   (occseg --help; docs/cli.md)\n";
 }
 
 int run(const DemoArgs& o) {
@@ -88,39 +112,43 @@ int run(const DemoArgs& o) {
   t = std::chrono::steady_clock::now();
   const std::string preset = preset_name(params.preset);
   const std::string method = "segmentation (preset " + preset + ")";
-  std::vector<std::pair<std::string, std::function<void(const std::string&)>>> files;
-  files.emplace_back("segmentation.png", [&](const std::string& f) {
-    const Dims& d = map.dims;
-    write_segmentation_png(f,
-                           "occseg demo: " + scene.name + " (" + sim::scan_mode_name(config.mode) + ", " +
-                               std::to_string(d.nx) + " x " + std::to_string(d.ny) + " x " + std::to_string(d.nz) +
-                               ", seed " + std::to_string(o.seed) + ", preset " + preset + ")",
-                           map, r, &truth.state);
-  });
-  files.emplace_back("labels.npy", [&](const std::string& f) { write_labels_npy(f, r.dims, r.labels); });
-  files.emplace_back("labels.nrrd", [&](const std::string& f) { write_labels_nrrd(f, map, r.labels); });
-  files.emplace_back("segments.json", [&](const std::string& f) {
-    const std::string text = segments_json(r, preset).dump(1) + "\n";
-    write_file_atomically(f, [&](std::ostream& s) { s << text; });
-  });
-  files.emplace_back("evaluation.json", [&](const std::string& f) {
-    const nlohmann::json j{{"scene", scene.name},
-                           {"method", method},
-                           {"reach", 3},
-                           {"scores", scores_json(scores, scene.objects)}};
-    const std::string text = j.dump(1) + "\n";
-    write_file_atomically(f, [&](std::ostream& s) { s << text; });
-  });
-  files.emplace_back("evaluation.txt", [&](const std::string& f) {
-    const std::string text = "scene " + scene.name + ", scored against the ideal state (truth_state.npy)\n" +
-                             scores_table({method}, {scores}, scene.objects);
-    write_file_atomically(f, [&](std::ostream& s) { s << text; });
-  });
+  using Writer = std::function<void(const std::string&, StagedFiles&)>;
+  const std::vector<std::pair<std::string, Writer>> files{
+      {"segmentation.png",
+       [&](const std::string& f, StagedFiles& staged) {
+         const Dims& d = map.dims;
+         write_segmentation_png(f,
+                                "occseg demo: " + scene.name + " (" + sim::scan_mode_name(config.mode) + ", " +
+                                    std::to_string(d.nx) + " x " + std::to_string(d.ny) + " x " +
+                                    std::to_string(d.nz) + ", seed " + std::to_string(o.seed) + ", preset " + preset +
+                                    ")",
+                                map, r, &truth.state, &staged);
+       }},
+      {"labels.npy", [&](const std::string& f, StagedFiles& s) { write_labels_npy(f, r.dims, r.labels, &s); }},
+      {"labels.nrrd", [&](const std::string& f, StagedFiles& s) { write_labels_nrrd(f, map, r.labels, &s); }},
+      {"segments.json",
+       [&](const std::string& f, StagedFiles& s) {
+         write_file_atomically(f, [&](std::ostream& os) { write_segments_json(os, r, preset); }, &s);
+       }},
+      {"evaluation.json",
+       [&](const std::string& f, StagedFiles& staged) {
+         const nlohmann::json j{{"scene", scene.name},
+                                {"method", method},
+                                {"reach", 3},
+                                {"scores", scores_json(scores, scene.objects)}};
+         const std::string text = j.dump(1) + "\n";
+         write_file_atomically(f, [&](std::ostream& s) { s << text; }, &staged);
+       }},
+      {"evaluation.txt",
+       [&](const std::string& f, StagedFiles& staged) {
+         const std::string text = "scene " + scene.name + ", scored against the ideal state (truth_state.npy)\n" +
+                                  scores_table({method}, {scores}, scene.objects);
+         write_file_atomically(f, [&](std::ostream& s) { s << text; }, &staged);
+       }}};
   // map.npy, truth_state.npy, truth_objects.npy, scene.json: as `occseg simulate` writes them.
-  bar.update("writing map and ground truth", 0.5);
-  write_simulation(out.dir(), scene, config, map, truth);
-  for (const char* f : {"map.npy", "truth_state.npy", "truth_objects.npy", "scene.json"}) out.adopt(f);
-  check_interrupted();
+  bar.update("writing map and ground truth", 0);
+  out.write({"map.npy", "truth_state.npy", "truth_objects.npy", "scene.json"},
+            [&](StagedFiles& s) { write_simulation(out.dir(), scene, config, map, truth, &s); });
   for (std::size_t k = 0; k < files.size(); ++k) {
     bar.update("writing " + files[k].first, double(k) / double(files.size()));
     out.write(files[k].first, files[k].second);
@@ -139,38 +167,24 @@ int run(const DemoArgs& o) {
   nlohmann::json summary = summary_json(rep);
   summary["evaluation"] = scores_json(scores, scene.objects);
   const std::string text = summary.dump(1) + "\n";
-  out.write("summary.json", [&](const std::string& f) {
-    write_file_atomically(f, [&](std::ostream& s) { s << text; });
+  out.write("summary.json", [&](const std::string& f, StagedFiles& staged) {
+    write_file_atomically(f, [&](std::ostream& s) { s << text; }, &staged);
   });
   summary["files"].push_back(out.path("summary.json"));
+  // Everything printed is made before the files are put in place, so running out of memory
+  // here still leaves the old files; after the commit only writing to stdout can fail.
+  set_activity("making the summary");
+  std::ostringstream shown;
+  if (o.report.json) shown << summary.dump(1) << "\n";
+  else if (!o.report.quiet) print_demo_summary(shown, rep, scene, scores, out.dir(), o.voxel_size);
+  const std::string printed = shown.str();
+  set_activity("putting the output files in place");
   out.commit();
   bar.clear();
-
-  if (o.report.json) {
-    std::cout << summary.dump(1) << "\n";
-    return kOk;
-  }
-  if (o.report.quiet) return kOk;
-  rep.files.clear();  // listed with explanations below
-  std::cout << "occseg demo: the paper's " << scene.name << " scene, simulated, segmented and scored\n";
-  print_summary(std::cout, rep);
-  std::cout << "scores against the ground truth: voxel accuracy " << pct(scores.accuracy) << ", IoU free "
-            << num(scores.iou[0]) << ", unknown " << num(scores.iou[1]) << ", occupied " << num(scores.iou[2])
-            << "; object voxels labelled free " << pct(scores.object_free_share) << ", unknown voxels labelled free "
-            << pct(scores.unknown_free_share) << "\n";
-  const std::string d = out.dir() + "/";
-  std::cout << "\nLook at " << d << "segmentation.png first. Everything is in " << d << ":\n"
-            << "  segmentation.png   slices through the map, the segments and the ideal state\n"
-            << "  segments.json      the segment table: state, voxels, mean probability, box, centroid\n"
-            << "  labels.npy         segment id per voxel, uint32 [z, y, x]; labels.nrrd for ParaView/3D Slicer\n"
-            << "  map.npy            the simulated map, float32 [z, y, x]: try `occseg segment " << d
-            << "map.npy --voxel-size " << o.voxel_size << " --out seg`\n"
-            << "  truth_state.npy    the ideal state per voxel; truth_objects.npy, scene.json: the scene\n"
-            << "  evaluation.txt     scores against the ground truth (evaluation.json: the same as JSON)\n"
-            << "  summary.json       this summary as JSON\n"
-            << "Next: occseg segment YOUR_MAP --out DIR   (occseg --help; docs/cli.md)\n";
+  std::cout << printed;
   return kOk;
 }
+
 
 }  // namespace
 

@@ -2,7 +2,8 @@
 // scene: simulate, segment with both presets, the baseline and the ideal labelling, score them,
 // and draw a picture like the paper's Figures 5-7 ((a) the map, (b) after segment creation, (c)
 // after refinement, plus the default preset and the ideal state). Writes DIR/<scene>.png,
-// DIR/results-<mode>.md and DIR/results-<mode>.json.
+// DIR/results-<mode>.md and DIR/results-<mode>.json, all or none (OutputSet): a failure or Ctrl-C
+// leaves the old files of DIR as they were.
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -15,6 +16,8 @@
 #include "occseg/file_write.hpp"
 #include "occseg/sim/scanner.hpp"
 #include "occseg/sim/truth.hpp"
+#include "outputs.hpp"
+#include "progress.hpp"
 #include "render_png.hpp"
 #include "sim_io.hpp"
 
@@ -67,13 +70,15 @@ std::string table_row(const std::string& scene, const std::string& method, const
 }
 
 int run(const FiguresOptions& o) {
+  install_interrupt_handlers();  // Ctrl-C stops at the next simulated layer or method
   if (o.dims.size() != 3) throw Error(Status::invalid_argument, "--dims takes three numbers: NX NY NZ");
   sim::ScanConfig config;
   config.mode = o.mode == "full3d" ? sim::ScanMode::full3d : sim::ScanMode::planar;
   config.seed = o.seed;
   config.threads = o.threads;
+  config.progress = [](double) { return interrupt_signal() == 0; };
   const std::vector<std::string> scenes = o.scenes.empty() ? sim::scene_names() : o.scenes;
-  make_directory(o.out_dir);
+  OutputSet out(o.out_dir);
   const Dims dims{o.dims[0], o.dims[1], o.dims[2]};
   std::ostringstream md;
   md << "Scenes of " << dims.nx << " x " << dims.ny << " x " << dims.nz << " voxels of " << o.voxel_size
@@ -85,12 +90,14 @@ int run(const FiguresOptions& o) {
      << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   nlohmann::json all = nlohmann::json::array();
   for (const std::string& name : scenes) {
+    set_activity("scene " + name + ": simulating and scoring");
     const sim::Scene scene = sim::make_scene(name, dims, o.voxel_size);
     const Grid map = sim::simulate_map(scene, config);
     const sim::Truth truth = sim::ground_truth(scene, config);
     nlohmann::json results = nlohmann::json::array();
     Result paper, dflt, ideal;
     for (const std::string& m : method_names()) {
+      check_interrupted();
       Result r = run_method(m, map, truth, o.threads, m == "paper");
       const sim::Scores s = sim::score_segmentation(truth, r.labels, segment_states(r));
       md << table_row(name, m, s);
@@ -118,15 +125,21 @@ int run(const FiguresOptions& o) {
       fo.title = "occseg: " + name + " (" + sim::scan_mode_name(config.mode) + ", " + std::to_string(dims.nx) + "x" +
                  std::to_string(dims.ny) + "x" + std::to_string(dims.nz) + ", seed " + std::to_string(o.seed) + ")";
       const std::string suffix = config.mode == sim::ScanMode::full3d ? "-full3d" : "";
-      const std::string path = o.out_dir + "/" + name + suffix + ".png";
-      render::write_png(path, render::render_figure(rows, slices, fo));
-      std::cout << ", picture " << path;
+      const std::string file = name + suffix + ".png";
+      set_activity("scene " + name + ": writing " + file);
+      out.write(file, [&](const std::string& f, StagedFiles& s) {
+        render::write_png(f, render::render_figure(rows, slices, fo), &s);
+      });
+      std::cout << ", picture " << out.path(file);
     }
     std::cout << "\n";
   }
   const std::string mode = sim::scan_mode_name(config.mode);
   const std::string table = md.str();
-  write_file_atomically(o.out_dir + "/results-" + mode + ".md", [&](std::ostream& out) { out << table; });
+  set_activity("writing the results");
+  out.write("results-" + mode + ".md", [&](const std::string& f, StagedFiles& s) {
+    write_file_atomically(f, [&](std::ostream& os) { os << table; }, &s);
+  });
   const std::string json = nlohmann::json{{"mode", mode},
                                           {"dims", {dims.nx, dims.ny, dims.nz}},
                                           {"voxel_size", o.voxel_size},
@@ -134,7 +147,11 @@ int run(const FiguresOptions& o) {
                                           {"scenes", all}}
                                .dump(1) +
                            "\n";
-  write_file_atomically(o.out_dir + "/results-" + mode + ".json", [&](std::ostream& out) { out << json; });
+  out.write("results-" + mode + ".json", [&](const std::string& f, StagedFiles& s) {
+    write_file_atomically(f, [&](std::ostream& os) { os << json; }, &s);
+  });
+  set_activity("putting the output files in place");
+  out.commit();
   std::cout << table;
   return kOk;
 }

@@ -1,10 +1,12 @@
 // `occseg segment IN --out DIR`: segment a map (.npy .nrrd .pcd .graph .bt .ot, see map_input)
 // and write labels.npy, labels.nrrd, segments.json and segmentation.png, plus map.nrrd for inputs
 // that were not grids and segments.pcd for point clouds; then a summary on stdout (text or
-// --json). All outputs or none: a failure or Ctrl-C removes what was written.
+// --json). All outputs or none (OutputSet): until every file is complete the old files of DIR stay
+// as they were; a failure, out of memory or Ctrl-C removes the new files' temporaries.
 #include <chrono>
 #include <iostream>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -14,12 +16,12 @@
 #include "occseg/npy.hpp"
 #include "occseg/nrrd.hpp"
 #include "occseg/segment.hpp"
+#include "occseg/segments_json.hpp"
 #include "map_input.hpp"
 #include "options.hpp"
 #include "outputs.hpp"
 #include "progress.hpp"
 #include "report.hpp"
-#include "segments_json.hpp"
 
 namespace occseg::cli {
 
@@ -62,31 +64,31 @@ int run(const SegmentArgs& o) {
 
   t = std::chrono::steady_clock::now();
   const std::string preset = preset_name(params.preset);
-  std::vector<std::pair<std::string, std::function<void(const std::string&)>>> files;
-  files.emplace_back("labels.npy", [&](const std::string& f) { write_labels_npy(f, r.dims, r.labels); });
-  files.emplace_back("labels.nrrd", [&](const std::string& f) { write_labels_nrrd(f, grid, r.labels); });
+  std::vector<std::pair<std::string, std::function<void(const std::string&, StagedFiles&)>>> files;
+  files.emplace_back("labels.npy",
+                     [&](const std::string& f, StagedFiles& s) { write_labels_npy(f, r.dims, r.labels, &s); });
+  files.emplace_back("labels.nrrd",
+                     [&](const std::string& f, StagedFiles& s) { write_labels_nrrd(f, grid, r.labels, &s); });
   if (input.kind != InputKind::volume)
-    files.emplace_back("map.nrrd", [&](const std::string& f) { write_grid_nrrd(f, grid); });
+    files.emplace_back("map.nrrd", [&](const std::string& f, StagedFiles& s) { write_grid_nrrd(f, grid, &s); });
   if (input.kind == InputKind::cloud && have_pcl())
-    files.emplace_back("segments.pcd", [&](const std::string& f) { write_cloud_output(f, grid, r); });
-  files.emplace_back("segments.json", [&](const std::string& f) {
-    const std::string text = segments_json(r, preset).dump(1) + "\n";
-    write_file_atomically(f, [&](std::ostream& s) { s << text; });
+    files.emplace_back("segments.pcd",
+                       [&](const std::string& f, StagedFiles& s) { write_cloud_output(f, grid, r, &s); });
+  files.emplace_back("segments.json", [&](const std::string& f, StagedFiles& s) {
+    write_file_atomically(f, [&](std::ostream& os) { write_segments_json(os, r, preset); }, &s);
   });
-  files.emplace_back("segmentation.png", [&](const std::string& f) {
+  files.emplace_back("segmentation.png", [&](const std::string& f, StagedFiles& s) {
     const Dims& d = grid.dims;
     write_segmentation_png(f,
                            "occseg segment " + base_name(o.input) + "  (" + std::to_string(d.nx) + " x " +
                                std::to_string(d.ny) + " x " + std::to_string(d.nz) + ", preset " + preset + ")",
-                           grid, r);
+                           grid, r, nullptr, &s);
   });
   for (std::size_t k = 0; k < files.size(); ++k) {
     bar.update("writing " + files[k].first, double(k) / double(files.size()));
     out.write(files[k].first, files[k].second);
   }
   steps.push_back({"write", since(t)});
-  out.commit();
-  bar.clear();
 
   RunReport rep;
   rep.input = o.input;
@@ -97,8 +99,21 @@ int run(const SegmentArgs& o) {
   rep.steps = steps;
   rep.files = out.files();
   rep.top = o.report.top;
-  if (o.report.json) std::cout << summary_json(rep).dump(1) << "\n";
-  else if (!o.report.quiet) print_summary(std::cout, rep);
+  // The summary is made before the files are put in place, so running out of memory here still
+  // leaves the old files; after the commit only writing it to stdout can fail.
+  set_activity("making the summary");
+  std::string text;
+  if (o.report.json) {
+    text = summary_json(rep).dump(1) + "\n";
+  } else if (!o.report.quiet) {
+    std::ostringstream s;
+    print_summary(s, rep);
+    text = s.str();
+  }
+  set_activity("putting the output files in place");
+  out.commit();
+  bar.clear();
+  std::cout << text;
   return kOk;
 }
 

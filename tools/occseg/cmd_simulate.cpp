@@ -1,6 +1,7 @@
 // `occseg simulate --scene NAME --out DIR`: simulate the range sensor of the paper's section 4
 // over a catalogue scene, fuse the scans into a probabilistic map and write it with its ground
-// truth (map.npy, truth_state.npy, truth_objects.npy, scene.json).
+// truth (map.npy, truth_state.npy, truth_objects.npy, scene.json), all four or none (OutputSet):
+// a failure or Ctrl-C leaves the old files of DIR as they were.
 #include <iostream>
 #include <memory>
 #include <string>
@@ -10,6 +11,8 @@
 #include "occseg/error.hpp"
 #include "occseg/sim/scanner.hpp"
 #include "occseg/sim/truth.hpp"
+#include "outputs.hpp"
+#include "progress.hpp"
 #include "sim_io.hpp"
 
 namespace occseg::cli {
@@ -25,6 +28,7 @@ struct SimulateOptions {
 };
 
 int run(const SimulateOptions& o) {
+  install_interrupt_handlers();  // Ctrl-C stops the simulation at its next layer
   if (o.dims.size() != 3) throw Error(Status::invalid_argument, "--dims takes three numbers: NX NY NZ");
   const sim::Scene scene = sim::make_scene(o.scene, Dims{o.dims[0], o.dims[1], o.dims[2]}, o.voxel_size);
   sim::ScanConfig c;
@@ -34,10 +38,19 @@ int run(const SimulateOptions& o) {
   c.angle_step_deg = o.step;
   c.max_range = o.max_range;
   c.threads = o.threads;
+  c.progress = [](double) { return interrupt_signal() == 0; };
   c.validate();
+  OutputSet out(o.out_dir);
+  set_activity("simulating scans");
   const Grid map = sim::simulate_map(scene, c);
+  set_activity("computing the ground truth");
   const sim::Truth truth = sim::ground_truth(scene, c);
-  write_simulation(o.out_dir, scene, c, map, truth);
+  check_interrupted();
+  set_activity("writing the map and the ground truth");
+  out.write({"map.npy", "truth_state.npy", "truth_objects.npy", "scene.json"},
+            [&](StagedFiles& s) { write_simulation(out.dir(), scene, c, map, truth, &s); });
+  set_activity("putting the output files in place");
+  out.commit();
   std::size_t seen = 0;
   for (float p : map.p) seen += p != 0.5f;
   std::cout << "scene " << scene.name << " (" << sim::scan_mode_name(c.mode) << ", " << scene.viewpoints.size()

@@ -188,12 +188,13 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
                                             "' (use .npy, .nrrd, .pcd, .graph, .bt, .ot or one a plugin reads)");
 }
 
-void write_cloud_output(const std::string& path, const Grid& grid, const Result& result) {
+void write_cloud_output(const std::string& path, const Grid& grid, const Result& result, StagedFiles* into) {
 #ifdef OCCSEG_HAVE_PCL
-  write_segments_pcd(path, grid, result, StateSet());
+  write_segments_pcd(path, grid, result, StateSet(), into);
 #else
   (void)grid;
   (void)result;
+  (void)into;
   not_built(path, "PCL (liboccseg_pcl)");
 #endif
 }

@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 
+#include "occseg/file_write.hpp"
 #include "occseg/grid.hpp"
 #include "occseg/segment.hpp"
 
@@ -37,8 +38,8 @@ struct MapInput {
 MapInput load_map(const std::string& path, const MapInputOptions& options);
 
 // Writes the voxel centres of occupied segments as a PointXYZL .pcd (label = segment id).
-// Throws Error(unsupported) in a build without PCL.
-void write_cloud_output(const std::string& path, const Grid& grid, const Result& result);
+// Throws Error(unsupported) in a build without PCL. `into`: as write_file_atomically.
+void write_cloud_output(const std::string& path, const Grid& grid, const Result& result, StagedFiles* into = nullptr);
 bool have_pcl();
 
 }  // namespace occseg::cli

@@ -1,5 +1,7 @@
 #include "outputs.hpp"
 
+#include <pthread.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -31,27 +33,56 @@ OutputSet::OutputSet(std::string dir) : dir_(std::move(dir)) {
     const std::size_t slash = p.find_last_of('/');
     p = slash == std::string::npos ? "" : p.substr(0, slash);
   }
-  for (auto it = missing.rbegin(); it != missing.rend(); ++it) {
-    if (::mkdir(it->c_str(), 0777) != 0 && errno != EEXIST)
-      throw Error(Status::io, "cannot create '" + *it + "': " + std::strerror(errno));
-    created_dirs_.push_back(*it);
+  try {
+    created_dirs_.reserve(missing.size());
+    for (auto it = missing.rbegin(); it != missing.rend(); ++it) {
+      if (::mkdir(it->c_str(), 0777) != 0 && errno != EEXIST)
+        throw Error(Status::io, "cannot create '" + *it + "': " + std::strerror(errno));
+      created_dirs_.push_back(*it);
+    }
+    if (!is_dir(dir_)) throw Error(Status::io, "'" + dir_ + "' is not a directory");
+  } catch (...) {
+    for (auto it = created_dirs_.rbegin(); it != created_dirs_.rend(); ++it) ::rmdir(it->c_str());
+    throw;
   }
-  if (!is_dir(dir_)) throw Error(Status::io, "'" + dir_ + "' is not a directory");
 }
 
 OutputSet::~OutputSet() {
-  if (committed_) return;
-  for (const std::string& f : files_) std::remove(f.c_str());
+  if (staged_.committed()) return;
+  staged_.discard();  // first, so that the directories this set created are empty again
   for (auto it = created_dirs_.rbegin(); it != created_dirs_.rend(); ++it) ::rmdir(it->c_str());
 }
 
-void OutputSet::write(const std::string& name, const std::function<void(const std::string&)>& write) {
+void OutputSet::write(const std::string& name, const std::function<void(const std::string&, StagedFiles&)>& write) {
   const std::string p = path(name);
-  write(p);
+  files_.reserve(files_.size() + 1);
+  write(p, staged_);
   files_.push_back(p);
   check_interrupted();
 }
 
-void OutputSet::adopt(const std::string& name) { files_.push_back(path(name)); }
+void OutputSet::write(const std::vector<std::string>& names, const std::function<void(StagedFiles&)>& write) {
+  files_.reserve(files_.size() + names.size());
+  write(staged_);
+  for (const std::string& n : names) files_.push_back(path(n));
+  check_interrupted();
+}
+
+void OutputSet::commit() {
+  sigset_t stop, old;
+  sigemptyset(&stop);
+  sigaddset(&stop, SIGINT);
+  sigaddset(&stop, SIGTERM);
+  // From here a Ctrl-C waits until the files are in place; one that came before cancels.
+  ::pthread_sigmask(SIG_BLOCK, &stop, &old);
+  try {
+    check_interrupted();
+    staged_.commit();
+  } catch (...) {
+    ::pthread_sigmask(SIG_SETMASK, &old, nullptr);
+    throw;
+  }
+  ::pthread_sigmask(SIG_SETMASK, &old, nullptr);
+}
 
 }  // namespace occseg::cli

@@ -1,10 +1,15 @@
-// The output files of one command, written all or none: each file goes through
-// write_file_atomically (no half-written file, ever), and unless the set is committed, a failure
-// or a Ctrl-C removes the files written so far, and the directories this set created.
+// The output files of one command, replaced all or nothing. Each file is staged: written
+// completely to a temporary beside its target (occseg::StagedFiles), so until commit() no old
+// file of the output directory is touched. commit() renames all of them into place in one short
+// step, unless a signal (Ctrl-C, SIGTERM) arrived before it; destroying a set that was not
+// committed (an error, out of memory, a signal) removes the temporaries and the directories the
+// set created. So DIR holds either its old files, each unchanged, or the complete new set.
 #pragma once
 #include <functional>
 #include <string>
 #include <vector>
+
+#include "occseg/file_write.hpp"
 
 namespace occseg::cli {
 
@@ -12,26 +17,29 @@ class OutputSet {
  public:
   // Creates `dir` and its missing parents now; Error(io) naming it when that fails.
   explicit OutputSet(std::string dir);
-  ~OutputSet();  // not committed: removes what it wrote and created
+  ~OutputSet();  // not committed: removes the temporaries and the directories it created
   OutputSet(const OutputSet&) = delete;
   OutputSet& operator=(const OutputSet&) = delete;
 
-  // Calls write(dir + "/" + name) (which must write that file atomically), records the file,
-  // then throws Error(cancelled) if a signal arrived meanwhile.
-  void write(const std::string& name, const std::function<void(const std::string& path)>& write);
-  // Records a file written by other means (it is removed like the others).
-  void adopt(const std::string& name);
-  // Keeps everything.
-  void commit() { committed_ = true; }
+  // Calls write(dir + "/" + name, staged), which must stage that file into `staged` (every
+  // writer takes it as its `into` argument), records the name, then throws Error(cancelled) if a
+  // signal arrived meanwhile.
+  void write(const std::string& name, const std::function<void(const std::string& path, StagedFiles& staged)>& write);
+  // The same for a writer that stages several files (`names`, in DIR) at once.
+  void write(const std::vector<std::string>& names, const std::function<void(StagedFiles& staged)>& write);
+  // Replaces the old files with the staged ones: with SIGINT and SIGTERM blocked, throws
+  // Error(cancelled) if one arrived before, else renames everything (StagedFiles::commit).
+  void commit();
 
   const std::string& dir() const { return dir_; }
   std::string path(const std::string& name) const { return dir_ + "/" + name; }
+  // The files of the set, in the order written.
   const std::vector<std::string>& files() const { return files_; }
 
  private:
   std::string dir_;
   std::vector<std::string> files_, created_dirs_;  // created_dirs_: innermost last
-  bool committed_ = false;
+  StagedFiles staged_;
 };
 
 }  // namespace occseg::cli

@@ -1,5 +1,6 @@
 #include "progress.hpp"
 
+#include <pthread.h>
 #include <sys/ioctl.h>
 #include <unistd.h>
 
@@ -17,6 +18,9 @@ namespace occseg::cli {
 namespace {
 
 volatile std::sig_atomic_t g_signal = 0;
+
+std::mutex g_activity_mutex;
+char g_activity[160] = "";
 
 extern "C" void on_signal(int sig) {
   if (!g_signal) g_signal = sig;
@@ -55,6 +59,17 @@ void check_interrupted() {
     throw Error(Status::cancelled, g_signal == SIGINT ? "interrupted (Ctrl-C)" : "terminated by a signal");
 }
 
+void set_activity(const char* what) noexcept {
+  std::lock_guard<std::mutex> lock(g_activity_mutex);
+  std::snprintf(g_activity, sizeof g_activity, "%s", what ? what : "");
+}
+
+void current_activity(char* out, std::size_t size) noexcept {
+  if (!size) return;
+  std::lock_guard<std::mutex> lock(g_activity_mutex);
+  std::snprintf(out, size, "%s", g_activity);
+}
+
 bool stderr_is_terminal() { return ::isatty(STDERR_FILENO) == 1; }
 
 double ProgressBar::default_delay() {
@@ -85,14 +100,24 @@ double ProgressBar::elapsed() const {
 }
 
 void ProgressBar::tick() {
+  // Signals go to the main thread, which defers Ctrl-C while it puts the output files in place.
+  sigset_t all;
+  sigfillset(&all);
+  ::pthread_sigmask(SIG_BLOCK, &all, nullptr);
   std::unique_lock<std::mutex> lock(mutex_);
   while (!stop_) {
     wake_.wait_for(lock, std::chrono::milliseconds(100));
-    if (!stop_ && active_ && elapsed() >= delay_) draw_locked();
+    try {
+      if (!stop_ && active_ && elapsed() >= delay_) draw_locked();
+    } catch (const std::exception&) {
+      // Out of memory for the line: no bar this time (an exception leaving this thread would
+      // end the process).
+    }
   }
 }
 
 bool ProgressBar::update(const std::string& label, double fraction) {
+  set_activity(label);
   if (g_signal) return false;
   if (!enabled_) return true;
   std::lock_guard<std::mutex> lock(mutex_);

@@ -22,6 +22,15 @@ int interrupt_signal();
 // Throws Error(cancelled) when a signal was received.
 void check_interrupted();
 
+// What the command is doing now ("reading map.npy", "segmenting: refinement", "writing
+// labels.npy"), for the message when memory runs out. ProgressBar::update records its label
+// here too. Copies into a fixed buffer (truncating), so it allocates nothing and cannot fail;
+// thread-safe.
+void set_activity(const char* what) noexcept;
+inline void set_activity(const std::string& what) noexcept { set_activity(what.c_str()); }
+// The last activity recorded ("" when none), copied into `out` of `size` bytes.
+void current_activity(char* out, std::size_t size) noexcept;
+
 // True when stderr is a terminal (isatty).
 bool stderr_is_terminal();
 

@@ -280,7 +280,7 @@ bool encode(const Image& img, const std::vector<Rgb>& palette, const std::vector
 
 }  // namespace
 
-void write_png(const std::string& path, const Image& img) {
+void write_png(const std::string& path, const Image& img, StagedFiles* into) {
   if (img.width <= 0 || img.height <= 0 || img.rgb.size() != std::size_t(img.width) * img.height * 3)
     throw Error(Status::invalid_argument, "cannot write an empty or inconsistent image to '" + path + "'");
   // Indexed colour when it fits: figures have few colours and compress far better that way.
@@ -304,7 +304,7 @@ void write_png(const std::string& path, const Image& img) {
   if (!encode(img, palette, indices, &sink)) throw Error(Status::internal, "libpng failed to encode '" + path + "'");
   write_file_atomically(path, [&](std::ostream& out) {
     out.write(reinterpret_cast<const char*>(sink.bytes.data()), static_cast<std::streamsize>(sink.bytes.size()));
-  });
+  }, into);
 }
 
 }  // namespace occseg::render

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "occseg/file_write.hpp"
 #include "occseg/grid.hpp"
 
 namespace occseg::render {
@@ -71,7 +72,8 @@ int text_width(const std::string& text, int scale = 1);
 Image render_figure(const std::vector<Volume>& rows, const std::vector<Slice>& slices, const FigureOptions& options);
 
 // Writes an 8-bit PNG (indexed colour when the image has at most 256 colours, else RGB)
-// atomically: Error(io) naming the path on failure, and no partial file.
-void write_png(const std::string& path, const Image& img);
+// atomically: Error(io) naming the path on failure, and no partial file. `into`: as
+// write_file_atomically.
+void write_png(const std::string& path, const Image& img, StagedFiles* into = nullptr);
 
 }  // namespace occseg::render

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "occseg/file_write.hpp"
 #include "occseg/grid.hpp"
 #include "occseg/segment.hpp"
 
@@ -48,6 +49,6 @@ nlohmann::json summary_json(const RunReport& run);
 // (state colours, segment boundaries, each occupied segment its own hue) and, when given, an
 // ideal state (the demo's ground truth), with a legend. Slices and scale: see docs/cli.md.
 void write_segmentation_png(const std::string& path, const std::string& title, const Grid& grid, const Result& r,
-                            const std::vector<std::uint8_t>* truth_states = nullptr);
+                            const std::vector<std::uint8_t>* truth_states = nullptr, StagedFiles* into = nullptr);
 
 }  // namespace occseg::cli

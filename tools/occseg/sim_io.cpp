@@ -116,30 +116,24 @@ json scene_json(const sim::Scene& scene, const sim::ScanConfig& config, const si
 }
 
 void write_simulation(const std::string& dir, const sim::Scene& scene, const sim::ScanConfig& config,
-                      const Grid& map, const sim::Truth& truth) {
+                      const Grid& map, const sim::Truth& truth, StagedFiles* into) {
   make_directory(dir);
   const Dims& d = map.dims;
   const std::vector<std::size_t> shape{d.nz, d.ny, d.nx};
   const std::string text = scene_json(scene, config, truth).dump(1) + "\n";
-  std::vector<std::string> done;
-  try {
-    const std::string m = dir + "/map.npy", s = dir + "/truth_state.npy", o = dir + "/truth_objects.npy";
-    write_grid_npy(m, map);
-    done.push_back(m);
-    write_npy(s, "|u1", shape, truth.state.data(), truth.state.size());
-    done.push_back(s);
-    if (scene.objects.size() <= 255) {
-      const std::vector<std::uint8_t> small(truth.objects.begin(), truth.objects.end());
-      write_npy(o, "|u1", shape, small.data(), small.size());
-    } else {
-      write_npy(o, "<u2", shape, truth.objects.data(), truth.objects.size() * 2);
-    }
-    done.push_back(o);
-    write_file_atomically(dir + "/scene.json", [&](std::ostream& out) { out << text; });
-  } catch (...) {
-    for (const std::string& f : done) std::remove(f.c_str());
-    throw;
+  StagedFiles own;
+  StagedFiles* set = into ? into : &own;
+  const std::string m = dir + "/map.npy", s = dir + "/truth_state.npy", o = dir + "/truth_objects.npy";
+  write_grid_npy(m, map, set);
+  write_npy(s, "|u1", shape, truth.state.data(), truth.state.size(), set);
+  if (scene.objects.size() <= 255) {
+    const std::vector<std::uint8_t> small(truth.objects.begin(), truth.objects.end());
+    write_npy(o, "|u1", shape, small.data(), small.size(), set);
+  } else {
+    write_npy(o, "<u2", shape, truth.objects.data(), truth.objects.size() * 2, set);
   }
+  write_file_atomically(dir + "/scene.json", [&](std::ostream& out) { out << text; }, set);
+  if (!into) own.commit();
 }
 
 TruthDir read_truth(const std::string& dir) {

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "occseg/file_write.hpp"
 #include "occseg/grid.hpp"
 #include "occseg/segment.hpp"
 #include "occseg/sim/metrics.hpp"
@@ -17,10 +18,11 @@ namespace occseg::cli {
 void make_directory(const std::string& dir);
 
 // Writes DIR/map.npy (float32 [z, y, x]), DIR/truth_state.npy (uint8 [z, y, x], occseg::State),
-// DIR/truth_objects.npy (uint8, or uint16 beyond 255 objects, [z, y, x]) and DIR/scene.json.
-// All four or none: on failure the ones already written are removed.
+// DIR/truth_objects.npy (uint8, or uint16 beyond 255 objects, [z, y, x]) and DIR/scene.json,
+// staged `into` the caller's set; without one, the four replace their old versions together
+// (all four or none, the old ones untouched on failure).
 void write_simulation(const std::string& dir, const sim::Scene& scene, const sim::ScanConfig& config,
-                      const Grid& map, const sim::Truth& truth);
+                      const Grid& map, const sim::Truth& truth, StagedFiles* into = nullptr);
 
 // The description written to scene.json.
 nlohmann::json scene_json(const sim::Scene& scene, const sim::ScanConfig& config, const sim::Truth& truth);

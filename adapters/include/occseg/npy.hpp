@@ -10,6 +10,8 @@
 
 namespace occseg {
 
+class StagedFiles;  // occseg/file_write.hpp
+
 struct NpyArray {
   std::string descr;                // numpy dtype string as stored, e.g. "<f4", "|u1", "<u4"
   std::vector<std::size_t> shape;   // as stored, slowest axis first (C order)
@@ -24,21 +26,22 @@ struct NpyArray {
 NpyArray read_npy(const std::string& path);
 NpyArray parse_npy(const unsigned char* bytes, std::size_t size, const std::string& name);
 
-// Writes a C-order array atomically (write_file_atomically).
+// Writes a C-order array atomically (write_file_atomically), or stages it `into` a set of files
+// replaced together.
 void write_npy(const std::string& path, const std::string& descr, const std::vector<std::size_t>& shape,
-               const void* data, std::size_t bytes);
+               const void* data, std::size_t bytes, StagedFiles* into = nullptr);
 
 // An occupancy map from an array indexed [z, y, x] (or [y, x] for a 2D map, nz = 1), C or Fortran
 // order. f4/f8 values must be probabilities in [0, 1]; u1 and u2 map 0..max to 0..1. Values are
 // checked (check_probabilities).
 Grid grid_from_npy(const NpyArray& a, double voxel_size, const std::string& name);
 
-// Writes a map as float32 [z, y, x] and labels as uint32 [z, y, x].
-void write_grid_npy(const std::string& path, const Grid& g);
+// Writes a map as float32 [z, y, x] and labels as uint32 [z, y, x] (`into`: as write_npy).
+void write_grid_npy(const std::string& path, const Grid& g, StagedFiles* into = nullptr);
 // Writes a map as [z, y, x] in any dtype the C ABI takes: "<f4", "<f8", "|u1" or "<u2"; integer
 // dtypes store round(p * max), which grid_from_npy maps back to within 0.5 / max. Throws
 // Error(invalid_argument) for another dtype.
 void write_grid_npy_as(const std::string& path, const Grid& g, const std::string& descr);
-void write_labels_npy(const std::string& path, const Dims& d, const LabelArray& labels);
+void write_labels_npy(const std::string& path, const Dims& d, const LabelArray& labels, StagedFiles* into = nullptr);
 
 }  // namespace occseg

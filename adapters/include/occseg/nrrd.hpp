@@ -16,6 +16,8 @@
 
 namespace occseg {
 
+class StagedFiles;  // occseg/file_write.hpp
+
 enum class NrrdType { u8, u16, u32, i32, f32, f64 };
 const char* nrrd_type_name(NrrdType t);  // the NRRD spelling: "uint8", ..., "float", "double"
 
@@ -39,12 +41,14 @@ NrrdVolume read_nrrd(const std::string& path);
 // for values outside [0, 1].
 Grid grid_from_nrrd(const NrrdVolume& v, const std::string& name);
 
-// Writes raw little-endian data with the grid geometry above, atomically.
+// Writes raw little-endian data with the grid geometry above, atomically (write_file_atomically),
+// or stages it `into` a set of files replaced together.
 void write_nrrd(const std::string& path, NrrdType type, const Dims& dims, double voxel_size,
                 const std::array<double, 3>& corner_origin, const void* data, std::size_t bytes,
-                const std::string& content = "");
+                const std::string& content = "", StagedFiles* into = nullptr);
 // A map as float, and a label volume (uint32, same geometry as `grid`).
-void write_grid_nrrd(const std::string& path, const Grid& grid);
-void write_labels_nrrd(const std::string& path, const Grid& grid, const LabelArray& labels);
+void write_grid_nrrd(const std::string& path, const Grid& grid, StagedFiles* into = nullptr);
+void write_labels_nrrd(const std::string& path, const Grid& grid, const LabelArray& labels,
+                       StagedFiles* into = nullptr);
 
 }  // namespace occseg

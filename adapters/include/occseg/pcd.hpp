@@ -10,6 +10,8 @@
 
 namespace occseg {
 
+class StagedFiles;  // occseg/file_write.hpp
+
 // Which voxel states go into an output cloud.
 struct StateSet {
   bool free = false, unknown = false, occupied = true;
@@ -27,9 +29,9 @@ struct StateSet {
 Grid read_pcd(const std::string& path, const ScanOptions& options);
 
 // Writes the voxel centres of the chosen states as a binary PointXYZL .pcd (label = segment id),
-// atomically. `grid` gives the frame (origin, voxel size) the result was computed on.
+// atomically (or staged `into` a set of files replaced together). `grid` gives the frame (origin, voxel size) the result was computed on.
 // Throws Error(invalid_argument) when grid and result disagree in dims, Error(io) on write failure.
 void write_segments_pcd(const std::string& path, const Grid& grid, const Result& result,
-                        StateSet states = StateSet());
+                        StateSet states = StateSet(), StagedFiles* into = nullptr);
 
 }  // namespace occseg

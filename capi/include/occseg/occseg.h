@@ -214,8 +214,11 @@ OCCSEG_API int occseg_map_from_buffer_flags(occseg_map **out, const void *data, 
 OCCSEG_API int occseg_map_read(occseg_map **out, const char *path);
 
 /* Writes the map with the writer registered for the path's extension: .npy (float32 [z, y, x]),
- * .nrrd (float, with voxel size and origin), or what plugins add; all or nothing.
- * OCCSEG_EUNSUPPORTED for an extension no writer handles. */
+ * .nrrd (float, with voxel size and origin), or what plugins add; all or nothing: the built-in
+ * writers write a new temporary beside `path` completely (created as occseg_result_write's are)
+ * and rename it over `path` only then, so on any failure (OCCSEG_EIO naming the path) the old
+ * file is unchanged and no temporary is left. OCCSEG_EUNSUPPORTED for an extension no writer
+ * handles. */
 OCCSEG_API int occseg_map_write(const occseg_map *map, const char *path);
 
 /* Frees a map. NULL is a no-op. */
@@ -334,9 +337,30 @@ OCCSEG_API int occseg_result_stage(const occseg_result *result, uint32_t index, 
                                    double *seconds);
 
 /* Writes `dir`/labels.npy (uint32 [z, y, x]) and `dir`/segments.json, the same files as
- * `occseg segment --out dir`, creating `dir` (not its parents) if missing. Each file is written
- * to a temporary name and renamed when complete; if segments.json fails, labels.npy is removed,
- * so a failure never leaves a partial file or a mismatched pair. */
+ * `occseg segment --out dir`, creating `dir` (not its parents) if missing.
+ *
+ * All or nothing: when the call returns, `dir` holds either what it held before, each of the two
+ * files unchanged (or absent, as before), or the complete new pair; never one new and one old
+ * file, a partial file or a temporary file. How:
+ *   1. Both files are written completely to new temporaries in `dir`, named `NAME.tmp-` and 16
+ *      random hex digits and created with O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, so a file
+ *      or symbolic link planted under such a name is never opened (another name is drawn); their
+ *      final mode is 0666 less the umask, as for any new file. Each is flushed and fsync'd. A
+ *      failure here (OCCSEG_EIO naming the file and the reason: a full disk, a quota,
+ *      RLIMIT_FSIZE "File too large", no permission; OCCSEG_ENOMEM) removes the temporaries and,
+ *      if this call created `dir`, `dir`; no old file has been touched.
+ *   2. In one short step, with SIGINT, SIGTERM, SIGHUP and SIGQUIT blocked on the calling thread
+ *      (a signal arriving then is delivered after it; the masks of other threads are theirs),
+ *      each temporary is swapped with the file it replaces (renameat2 RENAME_EXCHANGE) and the
+ *      old version deleted; then `dir` is fsync'd. If a rename fails in this step, the file
+ *      swapped before it is swapped back, and the call fails with OCCSEG_EIO naming the file. On
+ *      a file system without RENAME_EXCHANGE a plain rename is used, which cannot be undone: the
+ *      message then names the file already replaced.
+ * Not covered: the process being killed (SIGKILL, or a fatal signal taken by another thread) or
+ * the machine failing during step 2; each file is then old or new, and temporaries may remain.
+ * The library never changes signal dispositions: beyond RLIMIT_FSIZE the kernel sends SIGXFSZ,
+ * whose default action ends the process; a program that wants OCCSEG_EIO instead ignores SIGXFSZ
+ * (as the occseg command does). */
 OCCSEG_API int occseg_result_write(const occseg_result *result, const char *dir);
 
 /* ========================================================================================== */

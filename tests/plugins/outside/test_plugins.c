@@ -8,10 +8,13 @@
  *   test_plugins octomap FILE.bt              the installed OctoMap reader plugin, found by itself
  *   test_plugins pcd FILE.pcd                 the installed PCL reader plugin
  */
+#define _POSIX_C_SOURCE 200809L /* symlink, lstat */
 #include <occseg/occseg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 static int failures = 0;
 
@@ -174,12 +177,27 @@ static void example(const char *so, const char *work) {
     occseg_map_free(flat);
   }
 
-  /* Its writer and reader: a round trip through .occtxt keeps values, voxel size and origin. */
+  /* Its writer and reader: a round trip through .occtxt keeps values, voxel size and origin.
+   * A symbolic link planted where an earlier version put its temporary (PATH.tmp) is not
+   * followed: the file it points to stays as it was, and the map is a regular file. */
   {
     const double origin[3] = {1.5, -2, 0.25};
     double o[3], vs = 0;
+    char link[4200], victim[4200], got[16] = {0};
+    struct stat st;
+    FILE *f;
+    snprintf(victim, sizeof victim, "%s/victim.txt", work);
+    snprintf(link, sizeof link, "%s.tmp", path);
+    remove(link);
+    remove(path);
+    CHECK((f = fopen(victim, "w")) != NULL && fputs("precious", f) >= 0 && fclose(f) == 0);
+    CHECK(symlink(victim, link) == 0);
     CHECK(occseg_map_set_origin(m, origin) == OCCSEG_OK);
     CHECK(occseg_map_write(m, path) == OCCSEG_OK);
+    CHECK((f = fopen(victim, "r")) != NULL && fread(got, 1, sizeof got - 1, f) == 8 && fclose(f) == 0);
+    CHECK(strcmp(got, "precious") == 0);
+    CHECK(lstat(path, &st) == 0 && S_ISREG(st.st_mode));
+    remove(link);
     CHECK(occseg_map_read(&back, path) == OCCSEG_OK);
     CHECK(back && occseg_map_dims(back, dims) == OCCSEG_OK && dims[0] == 32 && dims[1] == 32 && dims[2] == 32);
     CHECK(back && occseg_map_voxel_size(back, &vs) == OCCSEG_OK && vs == 0.1);
