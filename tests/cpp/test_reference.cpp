@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "isa_levels.hpp"
 #include "rules/departures.hpp"
 #include "stages/histogram.hpp"
 #include "stages/refine.hpp"
@@ -18,6 +19,7 @@
 #include "reference/reference.hpp"
 
 using namespace occseg;
+using occseg::testing_isa::for_each_isa;
 
 namespace {
 
@@ -35,24 +37,22 @@ void expect_same_segments(const std::vector<Segment>& a, const std::vector<Segme
   }
 }
 
-// The own states as bits, as segment() has the texture's pass write them (detail::CellRows,
-// straight from the values): every row kernel the processor has must give the bits packed from
-// own_states()' bytes.
+// The own states as bits, as segment()'s fused map pass writes them (detail::CellRows, straight
+// from the values): every level of the row kernels the processor has must give the bits packed
+// from own_states()' bytes.
 detail::OwnBitsStore own_bits(const Grid& g) {
   const Dims& d = g.dims;
   detail::OwnBitsStore want = detail::pack_own_bits(own_states(g, Params()).data(), d, 1);
-  for (int kernel = static_cast<int>(detail::TextureKernel::fastest); kernel >= 0; --kernel) {
+  for_each_isa([&](kernels::Isa) {
     std::vector<std::uint64_t> u(want.unknown.size(), ~std::uint64_t(0)), o(want.occupied.size(), ~std::uint64_t(0));
     float lo = 0, hi = 0;
     detail::float_bounds(Params().free_below, Params().occupied_above, lo, hi);
-    detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
     detail::CellRows rows(g, nullptr, lo, hi, u.data(), o.data());
-    detail::set_texture_kernel(detail::TextureKernel::fastest);
     for (std::size_t z = 0; z < d.nz; ++z)
       for (std::size_t y = 0; y < d.ny; ++y) rows.add_row(y, z);
-    EXPECT_EQ(u, want.unknown) << "kernel " << kernel;
-    EXPECT_EQ(o, want.occupied) << "kernel " << kernel;
-  }
+    EXPECT_EQ(u, want.unknown);
+    EXPECT_EQ(o, want.occupied);
+  });
   return want;
 }
 
@@ -80,10 +80,10 @@ const Case kCases[] = {
 }  // namespace
 
 TEST(Reference, TextureCodesMatch) {
-  // Every contrast kernel: the compiler-vectorised one and the hand-written AVX2 and AVX-512 ones
-  // (each where the processor has it; otherwise the next slower one runs again).
-  for (int vector_kernel = 0; vector_kernel <= static_cast<int>(detail::TextureKernel::fastest); ++vector_kernel) {
-    detail::set_texture_kernel(static_cast<detail::TextureKernel>(vector_kernel));
+  // Every level of the kernels the processor has: the compiler-vectorised contrast kernel and
+  // the hand-written AVX2 and AVX-512 ones.
+  for_each_isa([&](kernels::Isa level) {
+    const std::string vector_kernel = kernels::isa_name(level);
     for (const Case& c : kCases) {
       const Grid g = test::random_map(c.dims, c.seed, c.noise);
       const TextureMap ref = reference::texture(g, 8);
@@ -97,8 +97,7 @@ TEST(Reference, TextureCodesMatch) {
       EXPECT_EQ(codes, ref.codes) << "seed " << c.seed << " kernel " << vector_kernel << " with scratch";
       EXPECT_EQ(compute_texture(g, 5, 2).codes, reference::texture(g, 5).codes) << "seed " << c.seed;
     }
-  }
-  detail::set_texture_kernel(detail::TextureKernel::fastest);
+  });
 }
 
 TEST(Reference, WholePipelineMatchesForBothPresets) {
@@ -117,17 +116,15 @@ TEST(Reference, WholePipelineMatchesForBothPresets) {
         expect_same_segments(r.segments, ref.segments, what);
       }
       // Without the stages kept, the creation leaves the states to the unknown growth, which
-      // writes each row once (every row kernel).
+      // writes each row once (every level of the row kernels).
       p.threads = 2;
-      for (int kernel = 0; kernel <= static_cast<int>(detail::TextureKernel::fastest); ++kernel) {
-        detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
+      for_each_isa([&](kernels::Isa level) {
         const Result r = segment(g, p);
         const std::string what = std::string(preset_name(p.preset)) + " seed " + std::to_string(c.seed) +
-                                 " kernel " + std::to_string(kernel) + " without the stages";
+                                 " kernels " + kernels::isa_name(level) + " without the stages";
         EXPECT_EQ(r.labels, ref.labels) << what;
         expect_same_segments(r.segments, ref.segments, what);
-      }
-      detail::set_texture_kernel(detail::TextureKernel::fastest);
+      });
     }
   }
 }
@@ -178,16 +175,15 @@ TEST(Reference, DivisionMatchesWithEveryCountingKernel) {
     without_flat += flat == 0;
     for (Params p : {Params::paper(), Params::defaults()}) {
       const std::vector<Block> want = reference::divide(g, t, p);
-      for (int kernel = 0; kernel <= static_cast<int>(detail::TextureKernel::fastest); ++kernel) {
-        detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
+      for_each_isa([&](kernels::Isa level) {
         for (int threads : {1, 2}) {
           p.threads = threads;
           const auto got = detail::divide_codes(g, reinterpret_cast<const detail::code_t*>(t.codes.data()),
                                                 t.code_count(), p, /*faces_only=*/true);
-          EXPECT_TRUE(same_blocks(got, want)) << "seed " << c.seed << " kernel " << kernel << " threads " << threads;
+          EXPECT_TRUE(same_blocks(got, want)) << "seed " << c.seed << " kernels " << kernels::isa_name(level)
+                                              << " threads " << threads;
         }
-      }
-      detail::set_texture_kernel(detail::TextureKernel::fastest);
+      });
     }
   }
   // Maps where the flat (common) code is a tenth of the voxels or more (unknown boxes at exactly
@@ -249,15 +245,14 @@ TEST(Reference, DivisionRatioIsExactAtTheThreshold) {
     ASSERT_GT(gmin, 0.0);
     extreme[max_pair[0]][max_pair[1]] = extreme[min_pair[0]][min_pair[1]] = true;
     const double ratio = gmax / gmin;
-    for (int kernel = 0; kernel <= static_cast<int>(detail::TextureKernel::fastest); ++kernel) {
-      detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
+    for_each_isa([&](kernels::Isa level) {
       for (const double x : {ratio, std::nextafter(ratio, 0.0)}) {
         p.split_ratio = x;
         const auto got = detail::divide_codes(g, codes.data(), 512, p, /*faces_only=*/false);
-        EXPECT_EQ(got.size(), x == ratio ? 1u : 8u) << "trial " << trial << " kernel " << kernel << " X " << x;
+        EXPECT_EQ(got.size(), x == ratio ? 1u : 8u)
+            << "trial " << trial << " kernels " << kernels::isa_name(level) << " X " << x;
       }
-    }
-    detail::set_texture_kernel(detail::TextureKernel::fastest);
+    });
   }
   for (int b = 1; b < 8; ++b)
     for (int a = 0; a < b; ++a) EXPECT_TRUE(extreme[a][b]) << "pair " << a << ", " << b << " never decided the ratio";
@@ -319,12 +314,11 @@ TEST(Reference, ContrastsOnStepBoundariesMatch) {
     const int nudge = r.below(5);
     v = nudge == 0 ? 0.5f : (nudge == 1 ? base : (nudge == 2 ? std::nextafter(base, 1.0f) : (nudge == 3 ? std::nextafter(base, 0.0f) : 0.75f)));
   }
-  for (int vector_kernel = 0; vector_kernel <= static_cast<int>(detail::TextureKernel::fastest); ++vector_kernel) {
-    detail::set_texture_kernel(static_cast<detail::TextureKernel>(vector_kernel));
+  for_each_isa([&](kernels::Isa level) {
     for (int bins : {8, 64})
-      EXPECT_EQ(compute_texture(g, bins, 2).codes, reference::texture(g, bins).codes) << bins << " " << vector_kernel;
-  }
-  detail::set_texture_kernel(detail::TextureKernel::fastest);
+      EXPECT_EQ(compute_texture(g, bins, 2).codes, reference::texture(g, bins).codes)
+          << bins << " " << kernels::isa_name(level);
+  });
 }
 
 // The unknown growth on bit masks against the reference's six byte scans, on random per-voxel
@@ -437,8 +431,8 @@ TEST(Reference, VoxelRulesMatchOnRandomStates) {
       const std::vector<std::uint8_t> own = own_states(g, Params());
       for (std::size_t i = 0; i < st.size(); i += d.nx)  // a candidate seed at a row end
         seeded_rows += own[i] == 1 && st[i] == 0 && want[i] == 1;
-      for (int vector_rows = 0; vector_rows <= static_cast<int>(detail::TextureKernel::fastest); ++vector_rows) {
-        detail::set_texture_kernel(static_cast<detail::TextureKernel>(vector_rows));  // the rules' kernels follow it
+      for_each_isa([&](kernels::Isa level) {  // the rules' kernels follow it
+        const std::string vector_rows = kernels::isa_name(level);
         for (int threads : {1, 2}) {
           Params p;
           p.threads = threads;
@@ -459,8 +453,7 @@ TEST(Reference, VoxelRulesMatchOnRandomStates) {
           detail::apply_voxel_rules(got.data(), bits.bits, d, p, nullptr, 0);
           EXPECT_EQ(got, want0) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " radius 0";
         }
-      }
-      detail::set_texture_kernel(detail::TextureKernel::fastest);
+      });
     }
   EXPECT_GT(seeded_rows, 10u);
 }

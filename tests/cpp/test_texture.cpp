@@ -4,10 +4,12 @@
 #include <cmath>
 #include <string>
 
+#include "isa_levels.hpp"
 #include "occseg/error.hpp"
 #include "stages/texture.hpp"
 
 using namespace occseg;
+using occseg::testing_isa::for_each_isa;
 
 // The paper's Figure 4, in our neighbour order (x-1, x+1, y-1, y+1, z-1, z+1 = weights 1..32):
 // the two neighbours below the centre (2 and 1) sit at weights 1 and 4, the four others
@@ -104,8 +106,7 @@ TEST(Texture, BadValuesAreErrorsNamingTheVoxel) {
                                   {1, 1, 1}, {12, 3, 2}, {16, 4, 4}, {17, 2, 3}, {19, 5, 1}, {20, 2, 4}};
   constexpr int kSpots = sizeof spots / sizeof spots[0];
   int checked = 0;
-  for (int kernel = 0; kernel <= static_cast<int>(detail::TextureKernel::fastest); ++kernel) {
-    detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
+  const int levels = for_each_isa([&](kernels::Isa level) {
     for (float v : bad)
       for (const auto& s : spots)
         for (int threads : {1, 2, 3}) {
@@ -116,17 +117,16 @@ TEST(Texture, BadValuesAreErrorsNamingTheVoxel) {
                                     std::to_string(s[2]) + ")";
           try {
             compute_texture(g, 8, threads);
-            ADD_FAILURE() << "no error for " << v << " at " << where << ", threads " << threads << ", kernel "
-                          << kernel;
+            ADD_FAILURE() << "no error for " << v << " at " << where << ", threads " << threads << ", kernels "
+                          << kernels::isa_name(level);
           } catch (const Error& e) {
             EXPECT_EQ(e.status(), Status::bad_value);
             EXPECT_NE(std::string(e.what()).find(where), std::string::npos) << e.what();
             ++checked;
           }
         }
-  }
-  detail::set_texture_kernel(detail::TextureKernel::fastest);
-  EXPECT_EQ(checked, (static_cast<int>(detail::TextureKernel::fastest) + 1) * 6 * kSpots * 3);
+  });
+  EXPECT_EQ(checked, levels * 6 * kSpots * 3);
 }
 
 // The edges of [0, 1] are valid wherever they sit, -0.0 (which compares equal to 0) and
@@ -139,14 +139,12 @@ TEST(Texture, EdgeValuesAreAccepted) {
   const float edge[] = {-0.0f, 0.0f, 1.0f, 1e-40f, std::nextafter(1.0f, 0.0f)};
   for (std::size_t i = 0; i < g.p.size(); ++i) g.p[i] = i % 3 ? 0.1f + 0.8f * float(i % 7) / 6 : edge[i % 5];
   std::vector<std::uint16_t> first;
-  for (int kernel = 0; kernel <= static_cast<int>(detail::TextureKernel::fastest); ++kernel) {
-    detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
+  for_each_isa([&](kernels::Isa level) {
     for (int threads : {1, 2}) {
       const TextureMap t = compute_texture(g, 8, threads);
       if (first.empty()) first = t.codes;
-      EXPECT_EQ(t.codes, first) << "kernel " << kernel << " threads " << threads;
+      EXPECT_EQ(t.codes, first) << "kernels " << kernels::isa_name(level) << " threads " << threads;
     }
-  }
-  detail::set_texture_kernel(detail::TextureKernel::fastest);
+  });
   EXPECT_EQ(std::count(first.begin(), first.end(), kNoTexture), 2 * (37 * 6 + 37 * 5 + 6 * 5) - 4 * (37 + 6 + 5) + 8);
 }
