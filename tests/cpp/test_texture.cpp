@@ -62,6 +62,57 @@ TEST(Texture, QuantizerEqualFrequencyWithTies) {
   EXPECT_EQ(q1.level(0.99), 7);
 }
 
+// The quantiser's lookups by parked step (quantise.hpp) are level(): the table of levels and the
+// rises the second pass compares against, for quantisers with tied cuts (all mass on a few
+// steps), at the ends of the fine steps (0 and kFine - 1), and for 2 to 64 bins.
+TEST(Texture, QuantizerLookupsByParkedStepAreItsLevels) {
+  std::uint64_t seed = 3;
+  for (int bins : {2, 3, 8, 17, 64})
+    for (int spread : {1, 3, 40, ContrastQuantizer::kFine}) {
+      std::vector<std::uint64_t> fine(ContrastQuantizer::kFine, 0);
+      for (int k = 0; k < 300; ++k) {
+        seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+        fine[(seed >> 33) % static_cast<std::uint64_t>(spread) * (ContrastQuantizer::kFine / spread)] += 1 + (seed >> 60);
+      }
+      fine[ContrastQuantizer::kFine - 1] += 1;
+      const ContrastQuantizer q(bins, fine);
+      const std::vector<std::uint16_t> level = q.parked_levels(), rises = q.rises();
+      ASSERT_EQ(level.size(), static_cast<std::size_t>(ContrastQuantizer::kFine + 1));
+      EXPECT_TRUE(std::is_sorted(rises.begin(), rises.end()));
+      EXPECT_EQ(rises.size(), static_cast<std::size_t>(level.back() - 1));
+      for (int v = 0; v <= ContrastQuantizer::kFine; ++v) {
+        const int want = v == 0 ? 0 : q.level_of_step(v - 1);
+        ASSERT_EQ(level[v], want) << "bins " << bins << " step " << v;
+        int by_rises = v != 0;
+        for (std::uint16_t r : rises) by_rises += v > r;
+        ASSERT_EQ(by_rises, want) << "bins " << bins << " step " << v;
+        const double c = (v - 0.5) / ContrastQuantizer::kFine;  // a contrast of parked step v
+        if (v > 0) {
+          ASSERT_EQ(ContrastQuantizer::parked_step(c), v);
+          ASSERT_EQ(q.level(c), want);
+        }
+      }
+      EXPECT_EQ(ContrastQuantizer::parked_step(0.0), 0);
+      EXPECT_EQ(ContrastQuantizer::parked_step(-0.25), 0);
+    }
+}
+
+// The plugin host's quantisation of a list of contrasts (quantise_contrasts) is the built-in
+// operator's: the quantiser of their own fine steps, NaN for no texture.
+TEST(Texture, QuantiseContrastsIsTheQuantizersLevel) {
+  std::vector<double> c;
+  for (int i = 0; i < 500; ++i) c.push_back(i % 7 == 0 ? 0.0 : (i % 11 == 0 ? std::nan("") : (i % 97) / 100.0));
+  std::vector<std::uint64_t> fine(ContrastQuantizer::kFine, 0);
+  for (double v : c)
+    if (v > 0) ++fine[ContrastQuantizer::fine_step(v)];
+  const ContrastQuantizer q(5, fine);
+  std::vector<std::uint16_t> levels(c.size());
+  quantise_contrasts(c.data(), c.size(), 5, levels.data(), 0xFFFF);
+  for (std::size_t i = 0; i < c.size(); ++i)
+    EXPECT_EQ(levels[i], std::isnan(c[i]) ? 0xFFFF : q.level(c[i])) << i;
+  EXPECT_THROW(quantise_contrasts(c.data(), c.size(), 1, levels.data(), 0xFFFF), Error);
+}
+
 TEST(Texture, CodesSkipBorderVoxels) {
   Grid g(Dims{4, 3, 3}, 0.2f);
   g.at(1, 1, 1) = 0.9f;
