@@ -7,7 +7,8 @@
 // "context-fresh" keeps the threads but recycles nothing (every call gets fresh label memory).
 // OCCSEG_BENCH_ISA=scalar|sse2|avx2|avx512|avx512vbmi caps the kernels of every stage at that
 // instruction-set level (kernels/isa.hpp; the fastest the processor has by default), to compare
-// them side by side; a level the processor lacks gives the highest one below it.
+// them side by side (unset or empty: no cap); a level the processor lacks gives the highest one
+// below it.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -73,7 +74,7 @@ int main(int argc, char** argv) {
     if (timing) {
       const Grid g = grid_from_npy(read_npy(argv[2]), 1.0, argv[2]);
       std::optional<kernels::ScopedIsa> isa;  // (on this thread, which runs every call)
-      if (const char* level = std::getenv("OCCSEG_BENCH_ISA")) {
+      if (const char* level = std::getenv("OCCSEG_BENCH_ISA"); level && *level) {
         const kernels::Isa* found = nullptr;
         for (const kernels::Isa& l : kernels::kIsaLevels)
           if (std::string(level) == kernels::isa_name(l)) found = &l;

@@ -1,3 +1,4 @@
+// The segment creation (section 3.2): block means, states, own states and the fused map pass.
 #include <gtest/gtest.h>
 
 #include <algorithm>

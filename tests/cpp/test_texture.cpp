@@ -1,3 +1,4 @@
+// The texture stage (section 2.2): texture units, the contrast quantiser, the codes and their value checks.
 #include <gtest/gtest.h>
 
 #include <algorithm>
