@@ -71,8 +71,8 @@ void pack_own_bits(const std::uint8_t* own, const Dims& dims, int threads, std::
 // voxels in x order: the order of mean_occupancy(). segment()'s fused map pass
 // (pipeline/map_pass.hpp) adds each row right after the texture's first pass read it, while it
 // is in the cache: creation then reads only these sums, not the map. The rows of one cell must be
-// added by one thread, in scan order. add_row() uses the kernels `k` (kept: worker threads add
-// rows).
+// added by one thread, in scan order. add_row() uses the kernels `k`, which must outlive the
+// object (a table's do: kernels::table()), on whichever thread adds the row.
 class CellRows {
  public:
   CellRows(const Grid& grid, std::uint8_t* own, float lo, float hi, std::uint64_t* unknown_bits = nullptr,
