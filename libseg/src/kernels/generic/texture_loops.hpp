@@ -7,12 +7,11 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <type_traits>
 
 #include "kernels/texture.hpp"
 
 namespace occseg::kernels::generic {
-
-#define OCCSEG_LOOP static inline __attribute__((always_inline))
 
 // Parked steps (kRecheckStep where uncertain) of n consecutive voxels whose neighbours are those
 // of `Present`. texture_unit()'s arithmetic is in double; this loop runs in float, which is
@@ -29,24 +28,27 @@ namespace occseg::kernels::generic {
 // Without it (rows whose values were checked before) the loop vectorises; GCC leaves the clamped
 // one scalar.
 template <unsigned Present, bool Clamp = false>
-OCCSEG_LOOP void contrast_row(const float* p, const std::ptrdiff_t* off, std::size_t n, code_t* out) {
-  const std::ptrdiff_t o0 = off[0], o1 = off[1], o2 = off[2], o3 = off[3], o4 = off[4], o5 = off[5];
+static inline __attribute__((always_inline)) void contrast_row(const float* p, const std::ptrdiff_t* off, std::size_t n, code_t* out) {
+  const std::ptrdiff_t o[6] = {off[0], off[1], off[2], off[3], off[4], off[5]};
   constexpr float kErr = 1e-6f, kFine = ContrastQuantizer::kFine;
   constexpr int kTop = ContrastQuantizer::kFine - 1;
   for (std::size_t x = 0; x < n; ++x) {
     const float c = p[x];
     float s1 = 0, s0 = 0, n1 = 0, n0 = 0;
-#define OCCSEG_NB(K, O)                       \
-  if (Present & (1u << K)) {                  \
-    const float v = p[std::ptrdiff_t(x) + O]; \
-    const bool up = v >= c;                   \
-    s1 += up ? v : 0.0f;                      \
-    s0 += up ? 0.0f : v;                      \
-    n1 += up ? 1.0f : 0.0f;                   \
-    n0 += up ? 0.0f : 1.0f;                   \
-  }
-    OCCSEG_NB(0, o0) OCCSEG_NB(1, o1) OCCSEG_NB(2, o2) OCCSEG_NB(3, o3) OCCSEG_NB(4, o4) OCCSEG_NB(5, o5)
-#undef OCCSEG_NB
+    // Neighbour K's part, in neighbour order (unrolled: K is a constant).
+    const auto neighbour = [&](auto K) {
+      if constexpr ((Present & (1u << K)) != 0) {
+        const float v = p[std::ptrdiff_t(x) + o[K]];
+        const bool up = v >= c;
+        s1 += up ? v : 0.0f;
+        s0 += up ? 0.0f : v;
+        n1 += up ? 1.0f : 0.0f;
+        n0 += up ? 0.0f : 1.0f;
+      }
+    };
+    neighbour(std::integral_constant<int, 0>{}), neighbour(std::integral_constant<int, 1>{});
+    neighbour(std::integral_constant<int, 2>{}), neighbour(std::integral_constant<int, 3>{});
+    neighbour(std::integral_constant<int, 4>{}), neighbour(std::integral_constant<int, 5>{});
     const float con = s1 / (n1 > 0 ? n1 : 1.0f) - s0 / (n0 > 0 ? n0 : 1.0f);
     const bool two_sided = (n1 > 0) & (n0 > 0);
     float lo = (con - kErr) * kFine, hi = (con + kErr) * kFine;  // |con| <= 1 for a valid map
@@ -65,28 +67,30 @@ OCCSEG_LOOP void contrast_row(const float* p, const std::ptrdiff_t* off, std::si
 
 // LBP codes of n consecutive voxels whose neighbours are those of `Present`.
 template <unsigned Present>
-OCCSEG_LOOP void lbp_row(const float* p, const std::ptrdiff_t* off, std::size_t n, std::uint8_t* out) {
-  const std::ptrdiff_t o0 = off[0], o1 = off[1], o2 = off[2], o3 = off[3], o4 = off[4], o5 = off[5];
+static inline __attribute__((always_inline)) void lbp_row(const float* p, const std::ptrdiff_t* off, std::size_t n, std::uint8_t* out) {
+  const std::ptrdiff_t o[6] = {off[0], off[1], off[2], off[3], off[4], off[5]};
   for (std::size_t x = 0; x < n; ++x) {
     const float c = p[x];
     std::uint8_t l = 0;
-#define OCCSEG_BIT(K, O) \
-  if (Present & (1u << K)) l |= p[std::ptrdiff_t(x) + O] >= c ? std::uint8_t(1u << K) : std::uint8_t(0);
-    OCCSEG_BIT(0, o0) OCCSEG_BIT(1, o1) OCCSEG_BIT(2, o2) OCCSEG_BIT(3, o3) OCCSEG_BIT(4, o4) OCCSEG_BIT(5, o5)
-#undef OCCSEG_BIT
+    const auto bit = [&](auto K) {  // neighbour K's bit (unrolled: K is a constant)
+      if constexpr ((Present & (1u << K)) != 0)
+        l |= p[std::ptrdiff_t(x) + o[K]] >= c ? std::uint8_t(1u << K) : std::uint8_t(0);
+    };
+    bit(std::integral_constant<int, 0>{}), bit(std::integral_constant<int, 1>{}), bit(std::integral_constant<int, 2>{});
+    bit(std::integral_constant<int, 3>{}), bit(std::integral_constant<int, 4>{}), bit(std::integral_constant<int, 5>{});
     out[x] = l;
   }
 }
 
 // True when some v[x] is kRecheckStep (branch-free, so it vectorises: rechecks are rare).
-OCCSEG_LOOP bool any_recheck(const code_t* v, std::size_t n) {
+static inline __attribute__((always_inline)) bool any_recheck(const code_t* v, std::size_t n) {
   unsigned any = 0;
   for (std::size_t x = 0; x < n; ++x) any |= v[x] == kRecheckStep;
   return any != 0;
 }
 
 // Adds the steps list[0, len) to the four interleaved histograms, one step to each in turn.
-OCCSEG_LOOP void count_list(const std::uint16_t* list, std::size_t len, std::uint64_t* h) {
+static inline __attribute__((always_inline)) void count_list(const std::uint16_t* list, std::size_t len, std::uint64_t* h) {
   static_assert(kStepHistograms == 4, "four histograms, one per voxel of a group");
   std::size_t i = 0;
   for (; i + 4 <= len; i += 4) {
@@ -99,7 +103,7 @@ OCCSEG_LOOP void count_list(const std::uint16_t* list, std::size_t len, std::uin
 }
 
 // lvl[x] = (v[x] != 0) + #{k : v[x] > rises[k]}.
-OCCSEG_LOOP void levels_row(const code_t* __restrict v, std::size_t n, const std::uint16_t* rises, std::size_t nr,
+static inline __attribute__((always_inline)) void levels_row(const code_t* __restrict v, std::size_t n, const std::uint16_t* rises, std::size_t nr,
                             std::uint16_t* __restrict lvl) {
   for (std::size_t x = 0; x < n; ++x) lvl[x] = v[x] != 0;
   for (std::size_t k = 0; k < nr; ++k) {
@@ -109,11 +113,9 @@ OCCSEG_LOOP void levels_row(const code_t* __restrict v, std::size_t n, const std
 }
 
 // code[x] = lbp[x] * bins + lvl[x].
-OCCSEG_LOOP void combine_row(const std::uint8_t* __restrict lbp, const std::uint16_t* __restrict lvl, std::size_t n,
+static inline __attribute__((always_inline)) void combine_row(const std::uint8_t* __restrict lbp, const std::uint16_t* __restrict lvl, std::size_t n,
                              std::uint16_t bins, code_t* __restrict code) {
   for (std::size_t x = 0; x < n; ++x) code[x] = static_cast<std::uint16_t>(lbp[x] * bins + lvl[x]);
 }
-
-#undef OCCSEG_LOOP
 
 }  // namespace occseg::kernels::generic
