@@ -5,19 +5,24 @@
 // With "context" every call goes through one occseg::Context (its threads kept), and each result
 // not kept is handed back with Context::recycle, as a program segmenting map after map would;
 // "context-fresh" keeps the threads but recycles nothing (every call gets fresh label memory).
+// OCCSEG_BENCH_ISA=scalar|sse2|avx2|avx512|avx512vbmi caps the kernels of every stage at that
+// instruction-set level (kernels/isa.hpp; the fastest the processor has by default), to compare
+// them side by side (unset or empty: no cap); a level the processor lacks gives the highest one
+// below it.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "occseg/context.hpp"
 #include "occseg/npy.hpp"
+#include "kernels/kernels.hpp"
 #include "occseg/segment.hpp"
-#include "stages/texture.hpp"
 #include "scenes.hpp"
 
 using namespace occseg;
@@ -68,13 +73,17 @@ int main(int argc, char** argv) {
                         std::string(argv[1]) == "time";
     if (timing) {
       const Grid g = grid_from_npy(read_npy(argv[2]), 1.0, argv[2]);
-      // OCCSEG_BENCH_TEXTURE_KERNEL=compiler|avx2 caps the texture kernels (the fastest the
-      // processor has by default), to compare them side by side.
-      if (const char* k = std::getenv("OCCSEG_BENCH_TEXTURE_KERNEL")) {
-        const std::string kernel = k;
-        detail::set_texture_kernel(kernel == "compiler" ? detail::TextureKernel::compiler
-                                   : kernel == "avx2"   ? detail::TextureKernel::avx2
-                                                        : detail::TextureKernel::fastest);
+      std::optional<kernels::ScopedIsa> isa;  // (on this thread, which runs every call)
+      if (const char* level = std::getenv("OCCSEG_BENCH_ISA"); level && *level) {
+        const kernels::Isa* found = nullptr;
+        for (const kernels::Isa& l : kernels::kIsaLevels)
+          if (std::string(level) == kernels::isa_name(l)) found = &l;
+        if (!found) {
+          std::fprintf(stderr, "occseg_bench_segment: OCCSEG_BENCH_ISA=%s is not one of scalar, sse2, avx2, "
+                               "avx512, avx512vbmi\n", level);
+          return 2;
+        }
+        isa.emplace(*found);
       }
       Params p;
       set_param(p, "preset", argv[3]);

@@ -1,17 +1,22 @@
+// The segment creation (section 3.2): block means, states, own states and the fused map pass.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 
 #include <cmath>
 
+#include "isa_levels.hpp"
+#include "occseg/registry.hpp"
+#include "pipeline/map_pass.hpp"
+#include "random_maps.hpp"
+#include "stages/codes.hpp"
 #include "stages/create.hpp"
+#include "stages/own_states.hpp"
 #include "stages/refine.hpp"
 #include "stages/texture.hpp"
-#include "stages/codes.hpp"
-#include "stages/own_states.hpp"
-#include "random_maps.hpp"
 
 using namespace occseg;
+using occseg::testing_isa::for_each_isa;
 
 TEST(Create, MopAndStateIntervals) {
   Grid g(Dims{4, 2, 1}, 0.0f);
@@ -153,17 +158,16 @@ TEST(Create, RowSumsAreMeanOccupancyBitForBit) {
       reordered_differs += mean_occupancy(swapped, b) != mean_occupancy(g, b);
     }
     ASSERT_GT(reordered_differs, blocks.size() / 3) << "map " << k << ": the values do not tell orders apart";
-    // Every row kernel the processor has (compiler, AVX2, AVX-512), on 1 to 3 threads.
-    for (int kernel = 0; kernel <= static_cast<int>(detail::TextureKernel::fastest); ++kernel)
+    // Every level of the row kernels the processor has, on 1 to 3 threads.
+    for_each_isa([&](kernels::Isa) {
       for (int threads : {1, 2, 3}) {
-        detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
         const std::vector<double> means = detail::block_means_by_rows(g, blocks, threads);
-        detail::set_texture_kernel(detail::TextureKernel::fastest);
         ASSERT_EQ(means.size(), blocks.size()) << "map " << k << ": the blocks do not tile it";
         std::size_t wrong = 0;
         for (std::size_t i = 0; i < blocks.size(); ++i) wrong += means[i] != mean_occupancy(g, blocks[i]);
-        EXPECT_EQ(wrong, 0u) << "map " << k << ", kernel " << kernel << ", " << threads << " threads";
+        EXPECT_EQ(wrong, 0u) << "map " << k << ", " << threads << " threads";
       }
+    });
   }
 }
 
@@ -192,14 +196,18 @@ TEST(Create, EveryVoxelGetsItsBlocksState) {
   }
 }
 
-// segment() has the texture's first pass add the map's rows for the creation (own states and
-// cell sums) while it reads them: on any thread count the result must be creation's own, bit for
-// bit. Values that tell orders apart (as above: 1 at each cell's first voxel, then values of
-// 2^-53 whose sum depends on the order), map depths that are not multiples of the cells' 8 planes
-// (the texture's per-thread chunks must start on a cell), and a band that leaves all three own
-// states.
-TEST(Create, TextureFirstPassAddsTheRowsAsCreationDoes) {
+// segment()'s fused map pass has the texture's first pass hand the map's rows to the creation
+// (own states and cell sums) while it reads them: on any thread count and kernels the result must
+// be creation's own, bit for bit, and the codes the texture's. Values that tell orders apart (as
+// above: 1 at each cell's first voxel, then values of 2^-53 whose sum depends on the order), map
+// depths that are not multiples of the cells' 8 planes (the texture's per-thread groups must
+// start on a cell), and a band that leaves all three own states; the own states both as bytes and
+// as bits (the pipeline's).
+TEST(Create, FusedMapPassAddsTheRowsAsCreationDoes) {
   const Dims dims[] = {{37, 29, 23}, {70, 9, 41}, {16, 16, 16}, {9, 3, 30}};
+  const TextureOperator* lbp6 = find_texture("lbp6");
+  ASSERT_NE(lbp6, nullptr);
+  ASSERT_NE(lbp6->native_into, nullptr);
   for (std::size_t k = 0; k < 4; ++k) {
     Grid g(dims[k], 0.0f);
     test::Rng r(90 + k);
@@ -212,23 +220,37 @@ TEST(Create, TextureFirstPassAddsTheRowsAsCreationDoes) {
     float lo = 0, hi = 0;
     detail::float_bounds(Params().free_below, Params().occupied_above, lo, hi);
     std::vector<std::uint8_t> want_own(g.p.size(), 0xEE);
-    detail::CellRows want(g, want_own.data(), lo, hi);
+    detail::CellRows want(g, want_own.data(), lo, hi, nullptr, nullptr, kernels::table(kernels::Isa::scalar).create);
     for (std::size_t z = 0; z < g.dims.nz; ++z)
       for (std::size_t y = 0; y < g.dims.ny; ++y) want.add_row(y, z);
     ASSERT_EQ(want_own, own_states(g, Params())) << "map " << k;
-    for (int kernel = 0; kernel <= static_cast<int>(detail::TextureKernel::fastest); ++kernel)  // the texture's row kernels, and the cells' with them
-      for (int threads : {1, 2, 3, 5}) {
-        std::vector<std::uint8_t> own(g.p.size(), 0xEE), lbp(g.p.size());
-        std::vector<std::uint16_t> codes(g.p.size());
-        detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
-        detail::CellRows rows(g, own.data(), lo, hi);
-        detail::compute_texture_into(g, 8, threads, reinterpret_cast<detail::code_t*>(codes.data()), lbp.data(), &rows);
-        detail::set_texture_kernel(detail::TextureKernel::fastest);
-        EXPECT_EQ(own, want_own) << "map " << k << ", " << threads << " threads";
-        ASSERT_EQ(rows.sums().size(), want.sums().size());
-        std::size_t wrong = 0;
-        for (std::size_t i = 0; i < rows.sums().size(); ++i) wrong += rows.sums()[i] != want.sums()[i];
-        EXPECT_EQ(wrong, 0u) << "map " << k << ", " << threads << " threads";
-      }
+    const detail::OwnBitsStore want_bits = detail::pack_own_bits(want_own.data(), g.dims, 1);
+    const TextureMap want_codes = compute_texture(g, 8, 1);
+    for_each_isa([&](kernels::Isa) {
+      for (int threads : {1, 2, 3, 5})
+        for (bool as_bits : {false, true}) {
+          const std::string what = "map " + std::to_string(k) + ", " + std::to_string(threads) + " threads, own states as " +
+                                   (as_bits ? "bits" : "bytes");
+          std::vector<std::uint8_t> own(g.p.size(), 0xEE), lbp(g.p.size());
+          std::vector<std::uint64_t> u(want_bits.unknown.size(), ~0ull), o(want_bits.occupied.size(), ~0ull);
+          std::vector<std::uint16_t> codes(g.p.size());
+          detail::CellRows rows = as_bits ? detail::CellRows(g, nullptr, lo, hi, u.data(), o.data())
+                                          : detail::CellRows(g, own.data(), lo, hi);
+          Params p;
+          p.threads = threads;
+          EXPECT_EQ(detail::fused_map_pass(*lbp6, g, p, kernels::active(), codes.data(), lbp.data(), rows), 64 * 8);
+          EXPECT_EQ(codes, want_codes.codes) << what;
+          if (as_bits) {
+            EXPECT_EQ(u, want_bits.unknown) << what;
+            EXPECT_EQ(o, want_bits.occupied) << what;
+          } else {
+            EXPECT_EQ(own, want_own) << what;
+          }
+          ASSERT_EQ(rows.sums().size(), want.sums().size());
+          std::size_t wrong = 0;
+          for (std::size_t i = 0; i < rows.sums().size(); ++i) wrong += rows.sums()[i] != want.sums()[i];
+          EXPECT_EQ(wrong, 0u) << what;
+        }
+    });
   }
 }

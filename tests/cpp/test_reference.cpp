@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "isa_levels.hpp"
 #include "rules/departures.hpp"
 #include "stages/divide.hpp"
 #include "stages/histogram.hpp"
@@ -43,24 +44,22 @@ void expect_same_segments(const std::vector<Segment>& a, const std::vector<Segme
   }
 }
 
-// The own states as bits, as segment() has the texture's pass write them (detail::CellRows,
-// straight from the values): every row kernel the processor has must give the bits packed from
-// own_states()' bytes.
+// The own states as bits, as segment()'s fused map pass writes them (detail::CellRows, straight
+// from the values): every level of the row kernels the processor has must give the bits packed
+// from own_states()' bytes.
 detail::OwnBitsStore own_bits(const Grid& g) {
   const Dims& d = g.dims;
   detail::OwnBitsStore want = detail::pack_own_bits(own_states(g, Params()).data(), d, 1);
-  for (int kernel = static_cast<int>(detail::TextureKernel::fastest); kernel >= 0; --kernel) {
+  for_each_isa([&](kernels::Isa) {
     std::vector<std::uint64_t> u(want.unknown.size(), ~std::uint64_t(0)), o(want.occupied.size(), ~std::uint64_t(0));
     float lo = 0, hi = 0;
     detail::float_bounds(Params().free_below, Params().occupied_above, lo, hi);
-    detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
     detail::CellRows rows(g, nullptr, lo, hi, u.data(), o.data());
-    detail::set_texture_kernel(detail::TextureKernel::fastest);
     for (std::size_t z = 0; z < d.nz; ++z)
       for (std::size_t y = 0; y < d.ny; ++y) rows.add_row(y, z);
-    EXPECT_EQ(u, want.unknown) << "kernel " << kernel;
-    EXPECT_EQ(o, want.occupied) << "kernel " << kernel;
-  }
+    EXPECT_EQ(u, want.unknown);
+    EXPECT_EQ(o, want.occupied);
+  });
   return want;
 }
 
@@ -88,10 +87,10 @@ const Case kCases[] = {
 }  // namespace
 
 TEST(Reference, TextureCodesMatch) {
-  // Every contrast kernel: the compiler-vectorised one and the hand-written AVX2 and AVX-512 ones
-  // (each where the processor has it; otherwise the next slower one runs again).
-  for (int vector_kernel = 0; vector_kernel <= static_cast<int>(detail::TextureKernel::fastest); ++vector_kernel) {
-    detail::set_texture_kernel(static_cast<detail::TextureKernel>(vector_kernel));
+  // Every level of the kernels the processor has: the compiler-vectorised contrast kernel and
+  // the hand-written AVX2 and AVX-512 ones.
+  for_each_isa([&](kernels::Isa level) {
+    const std::string vector_kernel = kernels::isa_name(level);
     for (const Case& c : kCases) {
       const Grid g = test::random_map(c.dims, c.seed, c.noise);
       const TextureMap ref = reference::texture(g, 8);
@@ -105,8 +104,7 @@ TEST(Reference, TextureCodesMatch) {
       EXPECT_EQ(codes, ref.codes) << "seed " << c.seed << " kernel " << vector_kernel << " with scratch";
       EXPECT_EQ(compute_texture(g, 5, 2).codes, reference::texture(g, 5).codes) << "seed " << c.seed;
     }
-  }
-  detail::set_texture_kernel(detail::TextureKernel::fastest);
+  });
 }
 
 TEST(Reference, WholePipelineMatchesForBothPresets) {
@@ -125,19 +123,16 @@ TEST(Reference, WholePipelineMatchesForBothPresets) {
         expect_same_segments(r.segments, ref.segments, what);
       }
       // Without the stages kept, the creation leaves the states to the unknown growth, which
-      // writes each row once (every level's row kernel; the texture's kernels set alongside).
+      // writes each row once (every level of the row kernels).
       p.threads = 2;
       const int levels = for_each_isa([&](kernels::Isa level) {
-        const int kernel = std::max(0, static_cast<int>(level) - 1);
-        detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
         const Result r = segment(g, p);
         const std::string what = std::string(preset_name(p.preset)) + " seed " + std::to_string(c.seed) +
-                                 " kernel " + std::to_string(kernel) + " without the stages";
+                                 " kernels " + kernels::isa_name(level) + " without the stages";
         EXPECT_EQ(r.labels, ref.labels) << what;
         expect_same_segments(r.segments, ref.segments, what);
       });
       EXPECT_GE(levels, 2);
-      detail::set_texture_kernel(detail::TextureKernel::fastest);
     }
   }
 }
@@ -331,12 +326,11 @@ TEST(Reference, ContrastsOnStepBoundariesMatch) {
     const int nudge = r.below(5);
     v = nudge == 0 ? 0.5f : (nudge == 1 ? base : (nudge == 2 ? std::nextafter(base, 1.0f) : (nudge == 3 ? std::nextafter(base, 0.0f) : 0.75f)));
   }
-  for (int vector_kernel = 0; vector_kernel <= static_cast<int>(detail::TextureKernel::fastest); ++vector_kernel) {
-    detail::set_texture_kernel(static_cast<detail::TextureKernel>(vector_kernel));
+  for_each_isa([&](kernels::Isa level) {
     for (int bins : {8, 64})
-      EXPECT_EQ(compute_texture(g, bins, 2).codes, reference::texture(g, bins).codes) << bins << " " << vector_kernel;
-  }
-  detail::set_texture_kernel(detail::TextureKernel::fastest);
+      EXPECT_EQ(compute_texture(g, bins, 2).codes, reference::texture(g, bins).codes)
+          << bins << " " << kernels::isa_name(level);
+  });
 }
 
 // The unknown growth on bit masks against the reference's six byte scans, on random per-voxel

@@ -1,13 +1,16 @@
+// The texture stage (section 2.2): texture units, the contrast quantiser, the codes and their value checks.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <string>
 
+#include "isa_levels.hpp"
 #include "occseg/error.hpp"
 #include "stages/texture.hpp"
 
 using namespace occseg;
+using occseg::testing_isa::for_each_isa;
 
 // The paper's Figure 4, in our neighbour order (x-1, x+1, y-1, y+1, z-1, z+1 = weights 1..32):
 // the two neighbours below the centre (2 and 1) sit at weights 1 and 4, the four others
@@ -60,6 +63,57 @@ TEST(Texture, QuantizerEqualFrequencyWithTies) {
   EXPECT_EQ(q1.level(0.99), 7);
 }
 
+// The quantiser's lookups by parked step (quantise.hpp) are level(): the table of levels and the
+// rises the second pass compares against, for quantisers with tied cuts (all mass on a few
+// steps), at the ends of the fine steps (0 and kFine - 1), and for 2 to 64 bins.
+TEST(Texture, QuantizerLookupsByParkedStepAreItsLevels) {
+  std::uint64_t seed = 3;
+  for (int bins : {2, 3, 8, 17, 64})
+    for (int spread : {1, 3, 40, ContrastQuantizer::kFine}) {
+      std::vector<std::uint64_t> fine(ContrastQuantizer::kFine, 0);
+      for (int k = 0; k < 300; ++k) {
+        seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+        fine[(seed >> 33) % static_cast<std::uint64_t>(spread) * (ContrastQuantizer::kFine / spread)] += 1 + (seed >> 60);
+      }
+      fine[ContrastQuantizer::kFine - 1] += 1;
+      const ContrastQuantizer q(bins, fine);
+      const std::vector<std::uint16_t> level = q.parked_levels(), rises = q.rises();
+      ASSERT_EQ(level.size(), static_cast<std::size_t>(ContrastQuantizer::kFine + 1));
+      EXPECT_TRUE(std::is_sorted(rises.begin(), rises.end()));
+      EXPECT_EQ(rises.size(), static_cast<std::size_t>(level.back() - 1));
+      for (int v = 0; v <= ContrastQuantizer::kFine; ++v) {
+        const int want = v == 0 ? 0 : q.level_of_step(v - 1);
+        ASSERT_EQ(level[v], want) << "bins " << bins << " step " << v;
+        int by_rises = v != 0;
+        for (std::uint16_t r : rises) by_rises += v > r;
+        ASSERT_EQ(by_rises, want) << "bins " << bins << " step " << v;
+        const double c = (v - 0.5) / ContrastQuantizer::kFine;  // a contrast of parked step v
+        if (v > 0) {
+          ASSERT_EQ(ContrastQuantizer::parked_step(c), v);
+          ASSERT_EQ(q.level(c), want);
+        }
+      }
+      EXPECT_EQ(ContrastQuantizer::parked_step(0.0), 0);
+      EXPECT_EQ(ContrastQuantizer::parked_step(-0.25), 0);
+    }
+}
+
+// The plugin host's quantisation of a list of contrasts (quantise_contrasts) is the built-in
+// operator's: the quantiser of their own fine steps, NaN for no texture.
+TEST(Texture, QuantiseContrastsIsTheQuantizersLevel) {
+  std::vector<double> c;
+  for (int i = 0; i < 500; ++i) c.push_back(i % 7 == 0 ? 0.0 : (i % 11 == 0 ? std::nan("") : (i % 97) / 100.0));
+  std::vector<std::uint64_t> fine(ContrastQuantizer::kFine, 0);
+  for (double v : c)
+    if (v > 0) ++fine[ContrastQuantizer::fine_step(v)];
+  const ContrastQuantizer q(5, fine);
+  std::vector<std::uint16_t> levels(c.size());
+  quantise_contrasts(c.data(), c.size(), 5, levels.data(), 0xFFFF);
+  for (std::size_t i = 0; i < c.size(); ++i)
+    EXPECT_EQ(levels[i], std::isnan(c[i]) ? 0xFFFF : q.level(c[i])) << i;
+  EXPECT_THROW(quantise_contrasts(c.data(), c.size(), 1, levels.data(), 0xFFFF), Error);
+}
+
 TEST(Texture, CodesSkipBorderVoxels) {
   Grid g(Dims{4, 3, 3}, 0.2f);
   g.at(1, 1, 1) = 0.9f;
@@ -104,8 +158,7 @@ TEST(Texture, BadValuesAreErrorsNamingTheVoxel) {
                                   {1, 1, 1}, {12, 3, 2}, {16, 4, 4}, {17, 2, 3}, {19, 5, 1}, {20, 2, 4}};
   constexpr int kSpots = sizeof spots / sizeof spots[0];
   int checked = 0;
-  for (int kernel = 0; kernel <= static_cast<int>(detail::TextureKernel::fastest); ++kernel) {
-    detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
+  const int levels = for_each_isa([&](kernels::Isa level) {
     for (float v : bad)
       for (const auto& s : spots)
         for (int threads : {1, 2, 3}) {
@@ -116,17 +169,16 @@ TEST(Texture, BadValuesAreErrorsNamingTheVoxel) {
                                     std::to_string(s[2]) + ")";
           try {
             compute_texture(g, 8, threads);
-            ADD_FAILURE() << "no error for " << v << " at " << where << ", threads " << threads << ", kernel "
-                          << kernel;
+            ADD_FAILURE() << "no error for " << v << " at " << where << ", threads " << threads << ", kernels "
+                          << kernels::isa_name(level);
           } catch (const Error& e) {
             EXPECT_EQ(e.status(), Status::bad_value);
             EXPECT_NE(std::string(e.what()).find(where), std::string::npos) << e.what();
             ++checked;
           }
         }
-  }
-  detail::set_texture_kernel(detail::TextureKernel::fastest);
-  EXPECT_EQ(checked, (static_cast<int>(detail::TextureKernel::fastest) + 1) * 6 * kSpots * 3);
+  });
+  EXPECT_EQ(checked, levels * 6 * kSpots * 3);
 }
 
 // The edges of [0, 1] are valid wherever they sit, -0.0 (which compares equal to 0) and
@@ -139,14 +191,12 @@ TEST(Texture, EdgeValuesAreAccepted) {
   const float edge[] = {-0.0f, 0.0f, 1.0f, 1e-40f, std::nextafter(1.0f, 0.0f)};
   for (std::size_t i = 0; i < g.p.size(); ++i) g.p[i] = i % 3 ? 0.1f + 0.8f * float(i % 7) / 6 : edge[i % 5];
   std::vector<std::uint16_t> first;
-  for (int kernel = 0; kernel <= static_cast<int>(detail::TextureKernel::fastest); ++kernel) {
-    detail::set_texture_kernel(static_cast<detail::TextureKernel>(kernel));
+  for_each_isa([&](kernels::Isa level) {
     for (int threads : {1, 2}) {
       const TextureMap t = compute_texture(g, 8, threads);
       if (first.empty()) first = t.codes;
-      EXPECT_EQ(t.codes, first) << "kernel " << kernel << " threads " << threads;
+      EXPECT_EQ(t.codes, first) << "kernels " << kernels::isa_name(level) << " threads " << threads;
     }
-  }
-  detail::set_texture_kernel(detail::TextureKernel::fastest);
+  });
   EXPECT_EQ(std::count(first.begin(), first.end(), kNoTexture), 2 * (37 * 6 + 37 * 5 + 6 * 5) - 4 * (37 + 6 + 5) + 8);
 }

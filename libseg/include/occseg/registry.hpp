@@ -23,7 +23,10 @@
 namespace occseg {
 
 namespace detail {
-class CellRows;  // creation's reading of the map, row by row (own_states_internal.hpp)
+struct MapRowSink;  // the fused map pass's per-row sink (pipeline/map_pass.hpp)
+}
+namespace kernels {
+struct Table;  // the kernels of a call (kernels/kernels.hpp)
 }
 
 // Name of the plugin that owns the built-in stages and parameters.
@@ -41,14 +44,13 @@ struct TextureOperator {
   TextureMap (*native)(const Grid& grid, const Params& params) = nullptr;
   // Built-in operators only, optional: `native` writing the codes into caller storage of
   // grid.dims.count() codes instead of a fresh array, with grid.dims.count() bytes of `scratch`
-  // it may use meanwhile (or nullptr); returns the number of distinct codes. segment() keeps
-  // both in the label array, which it allocates anyway (docs/performance.md). Its kNoTexture
-  // codes must lie only on the map's outer faces (the division counts the blocks inside without
-  // testing for them). With `rows` (else nullptr), it adds every row of the map to it as it reads
-  // them (CellRows::add_row, the rows of each kMeanCell planes on one thread), so that the
-  // creation need not read the map again.
-  int (*native_into)(const Grid& grid, const Params& params, std::uint16_t* codes, std::uint8_t* scratch,
-                     detail::CellRows* rows) = nullptr;
+  // it may use meanwhile (or nullptr), with the kernels `k`; returns the number of distinct codes.
+  // segment() keeps both in the label array, which it allocates anyway. Its kNoTexture codes must
+  // lie only on the map's outer faces (the division counts the blocks inside without testing for
+  // them). With `rows` (else nullptr), it hands every row of the map to it as it reads them, as
+  // map_pass.hpp's MapRowSink says, so that the creation need not read the map again.
+  int (*native_into)(const Grid& grid, const Params& params, const kernels::Table& k, std::uint16_t* codes,
+                     std::uint8_t* scratch, const detail::MapRowSink* rows) = nullptr;
 };
 
 struct Similarity {

@@ -24,6 +24,7 @@
 #include "util/huge_pages.hpp"
 #include "stages/own_states.hpp"
 #include "util/parallel_pool.hpp"
+#include "pipeline/map_pass.hpp"
 #include "pipeline/segment_internal.hpp"
 
 namespace occseg {
@@ -77,7 +78,7 @@ void release_freed_memory() {
 // check_probabilities(), with the common case (a valid map) tested in parallel vector code; the
 // scalar check runs only to name the first problem. values = false leaves the values to the
 // texture stage (the built-in operator tests each row while it reads it: one pass over the map
-// fewer, 3.7 ms of a 320 x 320 x 128 call on two threads).
+// fewer).
 void check_map(const Grid& grid, int threads, bool values) {
   check_dims(grid.dims);
   bool ok = grid.p.size() == grid.dims.count() && grid.voxel_size > 0 && std::isfinite(grid.voxel_size);
@@ -116,7 +117,6 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   params.validate();
   // The kernels of this call, chosen once on the calling thread and handed to every stage.
   const kernels::Table& k = kernels::active();
-  (void)k;
   // The built-in texture operator checks the values itself (compute_texture); plugins get a
   // checked map.
   const TextureOperator* op = find_texture(params.texture);
@@ -133,21 +133,20 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   // the texture codes (bytes [0, 2n)) through the division, with the texture's LBP codes in
   // [2n, 3n) while it runs; the refinement's bit masks take [0, 3n) once the codes are counted.
   // The voxels' own states are bits (detail::OwnBits, 1/4 byte per voxel) in [3n, 4n) from the
-  // texture's first pass through the rules; with a plugin's texture the creation writes them as
+  // fused map pass through the rules; with a plugin's texture the creation writes them as
   // bytes into [3n, 4n), packed into bits of the workspace. The array is allocated (or recycled)
-  // once and paged in once; separate arrays cost more allocations, zero-fills and page-ins
-  // (docs/performance.md, "Fourth round"). Peak: the labels and the states (5 bytes per voxel);
-  // a recycled array does not add to it.
+  // once and paged in once; separate arrays cost more allocations, zero-fills and page-ins.
+  // Peak: the labels and the states (5 bytes per voxel); a recycled array does not add to it.
   const std::size_t n = grid.dims.count();
   detail::check_labels_fit(n);  // before any stage allocates: the labels could not hold the result
   std::vector<Block> blocks;
   float own_lo = 0, own_hi = 0;
   detail::float_bounds(params.free_below, params.occupied_above, own_lo, own_hi);
-  std::optional<detail::CellRows> rows;  // the map's rows as the texture read them, for the creation
+  std::optional<detail::CellRows> rows;  // the map's rows as the fused map pass read them, for the creation
   Workspace local;
   Workspace& ws = workspace ? *workspace : local;
   // The own states' bits: in the label array's last quarter (nothing allocated, nothing held by a
-  // context between calls) when the texture's pass writes them and they fit (not for maps a few
+  // context between calls) when the fused map pass writes them and they fit (not for maps a few
   // voxels wide: a word per row), else in the workspace.
   const std::size_t words = (grid.dims.nx + 63) / 64, bit_words = grid.dims.ny * grid.dims.nz * words;
   detail::OwnBits own{nullptr, nullptr, words};
@@ -158,7 +157,7 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
     unknown = ws.unknown_bits.data();
     occupied = ws.occupied_bits.data();
   };
-  bool own_written = false;  // by the texture's first pass
+  bool own_written = false;  // by the fused map pass
   st.begin("texture");
   if (op && op->native_into) {
     resize_huge(r.labels, n);  // not zeroed (LabelArray): every stage writes before it reads
@@ -174,9 +173,11 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
     } else {
       in_workspace();
     }
-    rows.emplace(grid, nullptr, own_lo, own_hi, unknown, occupied);
+    rows.emplace(grid, nullptr, own_lo, own_hi, unknown, occupied, k.create);
     own_written = true;
-    const int codes = op->native_into(grid, params, reinterpret_cast<std::uint16_t*>(bytes), bytes + 2 * n, &*rows);
+    // The texture with the creation's reading of the map fused into its first pass (map_pass.hpp).
+    const int codes = detail::fused_map_pass(*op, grid, params, k, reinterpret_cast<std::uint16_t*>(bytes),
+                                             bytes + 2 * n, *rows);
     st.begin("division");
     blocks = detail::divide_codes(grid, reinterpret_cast<const detail::code_t*>(r.labels.data()), codes, params,
                                   /*faces_only=*/true, k);
@@ -194,7 +195,8 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   st.begin("creation");
   std::uint8_t* const scratch = reinterpret_cast<std::uint8_t*>(r.labels.data());
   // The growth's masks go where it keeps them (the label array's first bytes, free once the
-  // codes are counted), written by the creation if it can (GrowthRows).
+  // codes are counted), written by the creation if it can (GrowthRows: fused into its writing of
+  // the states, from its cells' states).
   const std::size_t room = 3 * n;
   std::vector<std::uint8_t> occupied_rows(grid.dims.ny * grid.dims.nz);
   detail::GrowthRows growth;
@@ -205,10 +207,10 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   const bool prefill = own_written && room >= detail::grow_unknown_scratch_bytes(grid.dims);
   std::uint8_t* const own_bytes = own_written ? nullptr : scratch + 3 * n;  // (a plugin's texture)
   UninitVector<std::uint8_t> states = detail::create_segments_and_own_states(
-      grid, blocks, params, own_bytes, rows ? &*rows : nullptr, prefill ? &growth : nullptr);
+      grid, blocks, params, own_bytes, rows ? &*rows : nullptr, prefill ? &growth : nullptr, k);
   rows.reset();
   if (own_bytes)
-    detail::pack_own_bits(own_bytes, grid.dims, params.threads, unknown, occupied);
+    detail::pack_own_bits(own_bytes, grid.dims, params.threads, unknown, occupied, k.create);
   if (keep_stages) {
     r.blocks = blocks;
     r.created_states.assign(states.begin(), states.end());

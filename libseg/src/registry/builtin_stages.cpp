@@ -46,10 +46,10 @@ TextureMap lbp6_native(const Grid& grid, const Params& params) {
   return compute_texture(grid, params.contrast_bins, params.threads);
 }
 
-int lbp6_native_into(const Grid& grid, const Params& params, std::uint16_t* codes, std::uint8_t* scratch,
-                     detail::CellRows* rows) {
+int lbp6_native_into(const Grid& grid, const Params& params, const kernels::Table& k, std::uint16_t* codes,
+                     std::uint8_t* scratch, const detail::MapRowSink* rows) {
   detail::compute_texture_into(grid, params.contrast_bins, params.threads, reinterpret_cast<detail::code_t*>(codes),
-                               scratch, rows);
+                               scratch, rows, k);
   return 64 * params.contrast_bins;
 }
 

@@ -312,8 +312,8 @@ std::string install_descriptor(const occseg_plugin_descriptor* d, const std::str
 }
 
 void set_native_texture(const std::string& name, TextureMap (*native)(const Grid&, const Params&),
-                        int (*native_into)(const Grid&, const Params&, std::uint16_t*, std::uint8_t*,
-                                                           detail::CellRows*)) {
+                        int (*native_into)(const Grid&, const Params&, const kernels::Table&, std::uint16_t*,
+                                           std::uint8_t*, const detail::MapRowSink*)) {
   Registry& g = raw();
   std::unique_lock<std::shared_mutex> lock(g.tables);
   for (auto& e : g.textures)

@@ -53,8 +53,8 @@ int host_contrast_levels(const double* contrast, size_t count, uint32_t bins, ui
 const occseg_plugin_descriptor* builtin_stages_descriptor();
 void attach_builtin_natives();
 void set_native_texture(const std::string& name, TextureMap (*native)(const Grid&, const Params&),
-                        int (*native_into)(const Grid&, const Params&, std::uint16_t*, std::uint8_t*,
-                                                           detail::CellRows*) = nullptr);
+                        int (*native_into)(const Grid&, const Params&, const kernels::Table&, std::uint16_t*,
+                                           std::uint8_t*, const detail::MapRowSink*) = nullptr);
 
 // params.cpp: parses `text` as a value of the parameter `info` (number kinds: a finite number
 // within the bounds, integral for "int"); throws Error(invalid_argument) naming it otherwise.

@@ -9,6 +9,7 @@
 #include "occseg/parallel.hpp"
 #include "occseg/registry.hpp"
 #include "registry/registry_internal.hpp"
+#include "stages/quantise.hpp"
 #include "stages/texture.hpp"
 
 struct occseg_plugin_map_sink {
@@ -162,12 +163,7 @@ int host_contrast_levels(const double* contrast, size_t count, uint32_t bins, ui
   }
   try {
     // The same fine steps and quantiser as the built-in 6-neighbour operator.
-    std::vector<std::uint64_t> fine(ContrastQuantizer::kFine, 0);
-    for (size_t i = 0; i < count; ++i)
-      if (contrast[i] > 0) ++fine[ContrastQuantizer::fine_step(contrast[i])];
-    const ContrastQuantizer q(static_cast<int>(bins), fine);
-    for (size_t i = 0; i < count; ++i)
-      levels[i] = std::isnan(contrast[i]) ? OCCSEG_NO_TEXTURE : static_cast<uint16_t>(q.level(contrast[i]));
+    quantise_contrasts(contrast, count, static_cast<int>(bins), levels, static_cast<std::uint16_t>(OCCSEG_NO_TEXTURE));
     return 0;
   } catch (const std::bad_alloc&) {
     set_plugin_error("contrast_levels: out of memory");

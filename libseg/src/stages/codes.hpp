@@ -1,29 +1,28 @@
 // Storage of texture codes (internal). segment() keeps the built-in operator's codes in the label
-// array it allocates anyway (docs/performance.md, "Fourth round"), so codes may live in storage
-// of another type. Every access to them goes through code_t, which may alias any type (a GCC and
-// Clang attribute): type-based alias analysis then never reorders code accesses against the
-// array's other uses, whatever the compiler inlines (LTO included).
+// array it allocates anyway, so codes may live in storage of another type: every access to them
+// goes through code_t (util/aliasing.hpp).
 #pragma once
 #include <cstdint>
 #include <vector>
 
-#include "stages/divide.hpp"
+#include "kernels/kernels.hpp"
 #include "occseg/grid.hpp"
 #include "occseg/params.hpp"
+#include "stages/divide.hpp"
+#include "util/aliasing.hpp"
 
 namespace occseg::detail {
 
-class CellRows;  // own_states_internal.hpp
-
-typedef std::uint16_t __attribute__((__may_alias__)) code_t;
+struct MapRowSink;  // pipeline/map_pass.hpp
 
 // compute_texture() writing the codes into `codes` (grid.dims.count() entries) instead of a
 // fresh array. Same codes, same errors. With `lbp_scratch` (grid.dims.count() bytes, any
 // storage), the first pass parks the LBP codes there and the second reads them instead of the
-// map. With `rows`, the first pass also adds every row of the map to it, right after the row's
-// texture (while the row is in the cache), each kMeanCell planes on one thread.
+// map. With `rows`, the first pass hands every row of the map to it right after the row's
+// texture (while the row is in the cache), as MapRowSink says.
 void compute_texture_into(const Grid& grid, int contrast_bins, int threads, code_t* codes,
-                          std::uint8_t* lbp_scratch = nullptr, CellRows* rows = nullptr);
+                          std::uint8_t* lbp_scratch = nullptr, const MapRowSink* rows = nullptr,
+                          const kernels::Table& k = kernels::active());
 
 // divide() on codes in any storage: `code_count` distinct codes (TextureMap::code_count()).
 // faces_only: kNoTexture codes lie only on the map's outer faces (the built-in operator's codes;

@@ -4,9 +4,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "stages/divide.hpp"
+#include "kernels/kernels.hpp"
 #include "occseg/grid.hpp"
 #include "occseg/params.hpp"
+#include "stages/divide.hpp"
 
 namespace occseg {
 
@@ -22,8 +23,8 @@ double mean_occupancy(const Grid& grid, const Block& block);
 
 // Paints each block's MOP state into a per-voxel state array (values of occseg::State). The
 // merging of adjacent same-state blocks is the connected-component labelling of this array
-// (components.hpp), done once at the end so refinement can move voxels between segments freely.
-std::vector<std::uint8_t> create_segments(const Grid& grid, const std::vector<Block>& blocks,
-                                          const Params& params);
+// (stages/label.hpp), done once at the end so refinement can move voxels between segments freely.
+std::vector<std::uint8_t> create_segments(const Grid& grid, const std::vector<Block>& blocks, const Params& params,
+                                          const kernels::Table& k = kernels::active());
 
 }  // namespace occseg

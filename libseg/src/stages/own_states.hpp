@@ -5,15 +5,12 @@
 #include <cstdint>
 #include <vector>
 
-#include "stages/divide.hpp"
+#include "kernels/kernels.hpp"
 #include "occseg/grid.hpp"
 #include "occseg/params.hpp"
 #include "occseg/uninit_vector.hpp"
+#include "stages/divide.hpp"
 #include "util/bit_rows.hpp"
-
-#ifdef __SSE2__
-#include <emmintrin.h>
-#endif
 
 namespace occseg::detail {
 
@@ -21,32 +18,25 @@ namespace occseg::detail {
 // double(p) < below  <=>  p < lo   and   double(p) > above  <=>  p > hi.
 void float_bounds(double below, double above, float& lo, float& hi);
 
-// out[i] = own state of p[i] for i in [0, n): 0 (free) when p < lo, 2 (occupied) when p > hi,
-// else 1 (also for NaN, which never reaches here: maps are checked first).
-inline void own_states_of(const float* p, std::size_t n, float lo, float hi, std::uint8_t* out) {
-  std::size_t i = 0;
-#ifdef __SSE2__
-  // 1 + (p < lo ? -1 : 0) - (p > hi ? -1 : 0), eight voxels per step.
-  const __m128 l = _mm_set1_ps(lo), h = _mm_set1_ps(hi);
-  const __m128i one = _mm_set1_epi32(1);
-  for (; i + 8 <= n; i += 8) {
-    const __m128 a = _mm_loadu_ps(p + i), b = _mm_loadu_ps(p + i + 4);
-    const __m128i sa = _mm_sub_epi32(_mm_add_epi32(one, _mm_castps_si128(_mm_cmplt_ps(a, l))),
-                                     _mm_castps_si128(_mm_cmpgt_ps(a, h)));
-    const __m128i sb = _mm_sub_epi32(_mm_add_epi32(one, _mm_castps_si128(_mm_cmplt_ps(b, l))),
-                                     _mm_castps_si128(_mm_cmpgt_ps(b, h)));
-    const __m128i s16 = _mm_packs_epi32(sa, sb);
-    _mm_storel_epi64(reinterpret_cast<__m128i*>(out + i), _mm_packus_epi16(s16, s16));
-  }
-#endif
-  for (; i < n; ++i) out[i] = static_cast<std::uint8_t>(p[i] < lo ? 0 : (p[i] > hi ? 2 : 1));
+// The own state of a value p: 0 (free) when p < lo, 2 (occupied) when p > hi, else 1 (also for
+// NaN, which never reaches here: maps are checked first). With float_bounds() of the band, the
+// state Params::state_of gives the value. The kernels' own_states and own_bits are tested
+// against it.
+inline std::uint8_t own_state_of(float p, float lo, float hi) {
+  return static_cast<std::uint8_t>(p < lo ? 0 : (p > hi ? 2 : 1));
 }
 
-// The voxels' own states as two bit masks in bit_rows_internal.hpp's layout (row r of the map in
+// out[i] = own_state_of(p[i]) for i in [0, n) (the kernels' own_states: CreateKernels).
+inline void own_states_of(const float* p, std::size_t n, float lo, float hi, std::uint8_t* out) {
+  for (std::size_t i = 0; i < n; ++i) out[i] = own_state_of(p[i], lo, hi);
+}
+
+// The voxels' own states as two bit masks in util/bit_rows.hpp's layout (row r of the map in
 // words [r * words, (r + 1) * words), voxel x at bit x % 64 of word x / 64, bits past nx 0):
 // `unknown` (p in the band) and `occupied` (above it); a free voxel has neither. The refinement
-// and the default rules read these instead of a byte per voxel: segment() has the texture's first
-// pass write them from the map (CellRows), so no own state is ever written as a byte there.
+// and the default rules read these instead of a byte per voxel: segment()'s fused map pass
+// (pipeline/map_pass.hpp) writes them from the map (CellRows), so no own state is ever written as
+// a byte there.
 struct OwnBits {
   const word_t* unknown = nullptr;  // (word_t: the words may live in the label array)
   const word_t* occupied = nullptr;
@@ -65,24 +55,25 @@ struct OwnBitsStore {
   std::vector<std::uint64_t> unknown, occupied;
   OwnBits bits;
 };
-OwnBitsStore pack_own_bits(const std::uint8_t* own, const Dims& dims, int threads);
+OwnBitsStore pack_own_bits(const std::uint8_t* own, const Dims& dims, int threads,
+                           const kernels::CreateKernels& k = kernels::active().create);
 // The same into caller storage (dims.ny * dims.nz * ceil(nx / 64) words each).
 void pack_own_bits(const std::uint8_t* own, const Dims& dims, int threads, std::uint64_t* unknown,
-                   std::uint64_t* occupied);
+                   std::uint64_t* occupied, const kernels::CreateKernels& k = kernels::active().create);
 
 // Creation's reading of the map, row by row: each voxel's own state (into `own` as bytes, when
-// given, and into `unknown_bits` and `occupied_bits` as OwnBits, when given: the refinement's
-// growth, boundary scans and rules start from those) and
-// the sum of each kMeanCell^3 cell of the lattice anchored at voxel 0 (the far faces cut the last
-// ones), its rows added in scan order, each row's voxels in x order: the order of
-// mean_occupancy(). segment() has the texture's first pass do it while each row is in the cache
-// (it reads the map anyway): creation then reads only these sums, not the 52 MB of a
-// 320 x 320 x 128 map (docs/performance.md, "Seventh round"). The rows of one cell must be added
-// by one thread, in scan order.
+// given, else into `unknown_bits` and `occupied_bits` as OwnBits: the refinement's growth,
+// boundary scans and rules start from those) and the sum of each kMeanCell^3 cell of the lattice
+// anchored at voxel 0 (the far faces cut the last ones), its rows added in scan order, each row's
+// voxels in x order: the order of mean_occupancy(). segment()'s fused map pass
+// (pipeline/map_pass.hpp) adds each row right after the texture's first pass read it, while it
+// is in the cache: creation then reads only these sums, not the map. The rows of one cell must be
+// added by one thread, in scan order. add_row() uses the kernels `k`, which must outlive the
+// object (a table's do: kernels::table()), on whichever thread adds the row.
 class CellRows {
  public:
   CellRows(const Grid& grid, std::uint8_t* own, float lo, float hi, std::uint64_t* unknown_bits = nullptr,
-           std::uint64_t* occupied_bits = nullptr);
+           std::uint64_t* occupied_bits = nullptr, const kernels::CreateKernels& k = kernels::active().create);
   void add_row(std::size_t y, std::size_t z);
   const std::vector<double>& sums() const { return sum_; }  // cell (x, y, z) at x + ncx * (y + ncy * z)
   std::size_t cells_x() const { return ncx_; }
@@ -95,13 +86,13 @@ class CellRows {
   std::uint64_t* occupied_;
   float lo_, hi_;
   std::size_t ncx_, ncy_;
-  bool avx2_, avx512_;
+  const kernels::CreateKernels* k_;
   std::vector<double> sum_;
 };
 
 // create_segments(), also writing every voxel's own state into `own` (grid.dims.count() bytes,
 // any storage: segment() uses the label array) while it reads the map for the block means: the
-// separate own_states() pass read the 52 MB of a 320 x 320 x 128 map once more. When the blocks
+// separate own_states() pass would read the map once more. When the blocks
 // tile the map (division's leaves do), `own` equals own_states(grid, params); voxels outside
 // every block are not written. The states are not zeroed first: the blocks must tile the map
 // (division's leaves do), or the voxels outside every block hold garbage. With `summed` (every
@@ -114,7 +105,8 @@ struct GrowthRows;
 UninitVector<std::uint8_t> create_segments_and_own_states(const Grid& grid, const std::vector<Block>& blocks,
                                                           const Params& params, std::uint8_t* own,
                                                           CellRows* summed = nullptr,
-                                                          GrowthRows* growth = nullptr);
+                                                          GrowthRows* growth = nullptr,
+                                                          const kernels::Table& k = kernels::active());
 
 // What the unknown growth packs from the states before it starts, written by the creation as it
 // writes the states from its cells' states instead (8 voxels per cell and per byte of a mask
