@@ -57,7 +57,6 @@ std::size_t next_boundary(const std::uint8_t* st, std::size_t k, std::size_t len
 std::size_t window_starts(const std::uint8_t* prev, const std::uint8_t* cur, std::uint8_t* skip, std::size_t nx,
                           std::uint32_t* lanes);
 void pack_states(const std::uint8_t* st, std::size_t nx, word_t* unknown, word_t* free);
-void pack_equal(const std::uint8_t* bytes, std::size_t n, std::uint8_t v, word_t* bits);
 void unpack_unknown(const word_t* w, std::size_t nx, std::uint8_t* st);
 void write_cells_row(const std::uint8_t* cs, const word_t* w, std::size_t nx, std::uint8_t* st);
 }  // namespace scalar
@@ -66,7 +65,6 @@ std::size_t next_boundary(const std::uint8_t* st, std::size_t k, std::size_t len
 std::size_t window_starts(const std::uint8_t* prev, const std::uint8_t* cur, std::uint8_t* skip, std::size_t nx,
                           std::uint32_t* lanes);
 void pack_states(const std::uint8_t* st, std::size_t nx, word_t* unknown, word_t* free);
-void pack_equal(const std::uint8_t* bytes, std::size_t n, std::uint8_t v, word_t* bits);
 void unpack_unknown(const word_t* w, std::size_t nx, std::uint8_t* st);
 }  // namespace sse2
 namespace avx2 {

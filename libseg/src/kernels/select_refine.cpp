@@ -1,5 +1,6 @@
 // Chooses the refinement's kernels for a level (kernels.hpp).
 #include "kernels/cpu_features.hpp"
+#include "kernels/create_impl.hpp"  // pack_equal: one kernel for both stages
 #include "kernels/refine.hpp"
 
 namespace occseg::kernels {

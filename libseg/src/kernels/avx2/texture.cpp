@@ -4,7 +4,7 @@
 #include <immintrin.h>
 
 #include "kernels/generic/texture_loops.hpp"
-#include "kernels/lane_pack.hpp"
+#include "kernels/avx2/lane_pack.hpp"
 #include "kernels/texture_impl.hpp"
 #include "occseg/grid.hpp"
 

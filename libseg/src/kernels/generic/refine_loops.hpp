@@ -67,12 +67,6 @@ __attribute__((always_inline)) inline void clear_words(word_t* bits, std::size_t
   for (std::size_t i = 0; i < (n + 63) / 64; ++i) bits[i] = 0;
 }
 
-// Bits [x, n) of pack_equal() (the words cleared already).
-__attribute__((always_inline)) inline void pack_equal_from(const std::uint8_t* bytes, std::size_t x, std::size_t n,
-                                                           std::uint8_t v, word_t* bits) {
-  for (; x < n; ++x) bits[x / 64] |= static_cast<std::uint64_t>(bytes[x] == v) << (x % 64);
-}
-
 // Voxels [x, nx) of unpack_unknown().
 __attribute__((always_inline)) inline void unpack_unknown_from(const word_t* w, std::size_t x, std::size_t nx,
                                                                std::uint8_t* st) {

@@ -24,11 +24,6 @@ void pack_states(const std::uint8_t* st, std::size_t nx, word_t* unknown, word_t
   generic::pack_states_from(st, 0, nx, unknown, free);
 }
 
-void pack_equal(const std::uint8_t* bytes, std::size_t n, std::uint8_t v, word_t* bits) {
-  generic::clear_words(bits, n);
-  generic::pack_equal_from(bytes, 0, n, v, bits);
-}
-
 void unpack_unknown(const word_t* w, std::size_t nx, std::uint8_t* st) { generic::unpack_unknown_from(w, 0, nx, st); }
 
 void write_cells_row(const std::uint8_t* cs, const word_t* w, std::size_t nx, std::uint8_t* st) {

@@ -56,11 +56,6 @@ void pack_states(const std::uint8_t* st, std::size_t nx, word_t* unknown, word_t
   generic::pack_states_from(st, x, nx, unknown, free);
 }
 
-// (util/bit_rows.hpp's SSE2 loop.)
-void pack_equal(const std::uint8_t* bytes, std::size_t n, std::uint8_t v, word_t* bits) {
-  detail::pack_equal(bytes, n, v, bits);
-}
-
 void unpack_unknown(const word_t* w, std::size_t nx, std::uint8_t* st) {
   const __m128i unknown = _mm_set1_epi8(static_cast<char>(kUnknown));
   std::size_t x = 0;
