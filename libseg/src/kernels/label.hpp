@@ -1,5 +1,6 @@
 // The labelling's kernels (kernels.hpp): the slots, and how a table fills them. Each slot is a
-// whole loop over a run or a block of rows; stages/label.cpp holds the algorithm around them.
+// whole loop over a row, a block of rows or a run; stages/label.cpp holds the algorithm around
+// them.
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -9,12 +10,11 @@
 namespace occseg::kernels {
 
 struct LabelKernels {
-  // First x in [x, e) with s[x] == v, or e.
-  std::size_t (*find_state)(const std::uint8_t* s, std::uint8_t v, std::size_t x, std::size_t e);
-  // First x in [x, e) with s[x] != v, or e.
-  std::size_t (*find_other)(const std::uint8_t* s, std::uint8_t v, std::size_t x, std::size_t e);
-  // First x of the run of equal states that holds voxel x of row `s` (searching back from x).
-  std::size_t (*run_start)(const std::uint8_t* s, std::size_t x);
+  // Sets bit i0 + x of `bits` (bit b at bit b % 8 of byte b / 8) for x = 0 and every x < nx with
+  // row[x] != row[x - 1]: the starts of the row's runs (maximal stretches of one state along x).
+  // The bits are ORed in, byte by byte: a byte that also holds bits of voxels outside the row is
+  // read and written back with those bits unchanged.
+  void (*row_starts)(const std::uint8_t* row, std::size_t nx, std::uint8_t* bits, std::size_t i0);
   // Runs (maximal stretches of one state along x) in every `every`-th of `rows` consecutive rows
   // of nx states each (nx >= 1).
   std::size_t (*count_runs)(const std::uint8_t* s, std::size_t rows, std::size_t nx, std::size_t every);

@@ -61,27 +61,6 @@ inline void unite_shared(std::uint32_t* parent, std::uint32_t a, std::uint32_t b
   }
 }
 
-// End of the run of equal states that starts at x in row `s` of length nx.
-inline std::size_t run_end(const kernels::LabelKernels& k, const std::uint8_t* s, std::size_t x, std::size_t nx) {
-  return k.find_other(s, s[x], x + 1, nx);
-}
-
-// Calls fn(j) for the first voxel j of every run of state v in row `other` that meets [lo, hi):
-// one call per run (a run is one component), the first one's start found by searching back.
-template <typename Fn>
-inline void for_each_run_in(const kernels::LabelKernels& k, const std::uint8_t* other, std::uint8_t v,
-                            std::size_t lo, std::size_t hi, Fn&& fn) {
-  std::size_t x = k.find_state(other, v, lo, hi);
-  if (x == hi) return;
-  if (x == lo) x = k.run_start(other, x);
-  while (true) {
-    fn(x);
-    x = k.find_other(other, v, std::max(x + 1, lo), hi);
-    x = k.find_state(other, v, x, hi);
-    if (x == hi) return;
-  }
-}
-
 // Calls fn(slab) for every slab, through parallel_for_dynamic: slabs differ widely in cost (a
 // slab of noise holds many times the runs of a slab of free space), so fixed shares would leave
 // threads idle. Each slab's work only writes its own data, so the order changes nothing.
@@ -94,9 +73,11 @@ void for_each_slab(std::size_t slabs, int threads, Fn&& fn) {
 
 constexpr std::uint8_t kOccupiedState = static_cast<std::uint8_t>(State::occupied);
 
-// Run starts as bits (voxel i at bit i % 8 of byte i / 8): the statistics pass finds its runs
-// there once the states are gone (1/8 byte per voxel; the states are 1). Slabs are a multiple of
-// 8 voxels long, so each slab writes only bytes of its own.
+// Run starts as bits (voxel i at bit i % 8 of byte i / 8), set row by row (the row_starts
+// kernel) as the slabs are labelled: a row's runs are the stretches between its set bits, so the
+// labelling walks the runs of a row, and of the rows before it, there (1/8 byte per voxel), and
+// the statistics pass finds them there once the states are gone. Slabs are a multiple of 8 voxels
+// long, so each slab's thread reads and writes only bytes of its own.
 static_assert(kLabelSlab % 8 == 0, "slabs must start on a byte of the run-start bits");
 
 // First set bit in [i, end) of `bits` (padded by 8 bytes past its last byte), or end.
@@ -111,6 +92,63 @@ inline std::size_t next_start(const std::uint8_t* bits, std::size_t i, std::size
   return end;
 }
 
+// The set bits of `bits` in [i, end), in order, reading no byte at or past byte `last`
+// (end <= 8 * last): while the slabs are being labelled, the bytes after a slab's are the next
+// slab's. Eight bytes are read at a time, and their bits taken one by one.
+class StartsIn {
+ public:
+  StartsIn(const std::uint8_t* bits, std::size_t i, std::size_t end, std::size_t last)
+      : bits_(bits), end_(end), last_(last) {
+    fill(i);
+  }
+  // The next set bit, or `end` when none is left before it.
+  std::size_t next() {
+    while (!w_) {
+      if (stop_ >= end_) return end_;
+      fill(stop_);
+    }
+    const std::size_t j = base_ + static_cast<std::size_t>(__builtin_ctzll(w_));
+    w_ &= w_ - 1;
+    return j < end_ ? j : end_;
+  }
+
+ private:
+  // Bits i .. 8 * (i / 8) + 63.
+  void fill(std::size_t i) {
+    const std::size_t at = i / 8;
+    std::uint64_t w = 0;
+    if (at + sizeof w <= last_) {
+      std::memcpy(&w, bits_ + at, sizeof w);  // little-endian: bit i % 8 of byte i / 8 is bit i % 8
+    } else {
+      for (std::size_t k = at; k < last_; ++k) w |= static_cast<std::uint64_t>(bits_[k]) << (8 * (k - at));
+    }
+    w_ = w >> (i % 8);
+    base_ = i;
+    stop_ = 8 * at + 64;
+  }
+
+  const std::uint8_t* bits_;
+  const std::size_t end_, last_;
+  std::size_t base_ = 0, stop_ = 0;
+  std::uint64_t w_ = 0;
+};
+
+// Last set bit of `bits` at or before i; one is set in byte `first` or after it, and no byte
+// before `first` is read.
+inline std::size_t prev_start(const std::uint8_t* bits, std::size_t i, std::size_t first) {
+  std::size_t at = i / 8;
+  unsigned b = bits[at] & (0xFFu >> (7 - i % 8));
+  if (b) return 8 * at + static_cast<std::size_t>(31 - __builtin_clz(b));
+  for (; at >= first + 8; at -= 8) {  // bytes [at - 8, at)
+    std::uint64_t w;
+    std::memcpy(&w, bits + at - 8, sizeof w);
+    if (w) return 8 * (at - 8) + static_cast<std::size_t>(63 - __builtin_clzll(w));
+  }
+  while (!(b = bits[--at])) {
+  }
+  return 8 * at + static_cast<std::size_t>(31 - __builtin_clz(b));
+}
+
 // Set bits of `bits` in [b, e). With b a row's first voxel and e a run start: the run's index in
 // its row (the slab join looks the dense slabs' runs up by it; at most a row per call).
 inline std::size_t starts_between(const std::uint8_t* bits, std::size_t b, std::size_t e) {
@@ -121,20 +159,17 @@ inline std::size_t starts_between(const std::uint8_t* bits, std::size_t b, std::
   return c;
 }
 
-// next_start() reading no byte past the one of voxel end - 1: while the slabs are being
-// labelled, the bytes after a slab's are the next slab's (slabs start on a byte).
-inline std::size_t next_start_in(const std::uint8_t* bits, std::size_t i, std::size_t end) {
-  const std::size_t last = (end + 7) / 8;  // bytes [0, last) may be read
-  while (i < end) {
-    std::uint64_t w = 0;
-    const std::size_t at = i / 8;
-    if (at + sizeof w <= last) std::memcpy(&w, bits + at, sizeof w);  // little-endian, as in next_start
-    else std::memcpy(&w, bits + at, last - at);
-    w >>= i % 8;
-    if (w) return std::min(end, i + static_cast<std::size_t>(__builtin_ctzll(w)));
-    i += 64 - i % 8;
-  }
-  return end;
+// Calls fn(j) for the first voxel j of every run of state v that meets [lo, hi) in the row at
+// map index j0 (its states `row`, its run starts set in `bits`, read below byte `last`), in order:
+// one call per run (a run lies in one component).
+template <typename Fn>
+inline void for_each_run_in(const std::uint8_t* bits, std::size_t last, const std::uint8_t* row, std::size_t j0,
+                            std::uint8_t v, std::size_t lo, std::size_t hi, Fn&& fn) {
+  const std::size_t j = prev_start(bits, j0 + lo, j0 / 8) - j0;  // the run that holds lo
+  if (row[j] == v) fn(j);
+  StartsIn later(bits, j0 + lo + 1, j0 + hi, last);
+  for (std::size_t k = later.next(); k < j0 + hi; k = later.next())
+    if (row[k - j0] == v) fn(k - j0);
 }
 
 struct SlotStats {  // one segment's share of one slab
@@ -235,8 +270,6 @@ class Labelling {
     return run_local_[sl][row_first_[sl][r] + k];
   }
 
-  void mark_start(std::size_t rs) { starts_[rs / 8] = static_cast<std::uint8_t>(starts_[rs / 8] | (1u << (rs % 8))); }
-
   const std::uint8_t* s_;
   const kernels::LabelKernels& k_;
   const std::size_t nx, ny, nz, sz, slabs;
@@ -260,17 +293,20 @@ class Labelling {
 
 void Labelling::label_sparse_slab(std::size_t sl) {
   const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab);
+  const std::size_t last = (ze * sz + 7) / 8;  // the slab's run-start bits: bytes before `last`
   const std::uint8_t* const s = s_;
   std::uint32_t* const lab = lab_;
+  std::uint8_t* const bits = starts_.data();
   for (std::size_t z = zb; z < ze; ++z)
     for (std::size_t y = 0; y < ny; ++y) {
       const std::size_t i0 = nx * (y + ny * z);
       const std::uint8_t* row = s + i0;
+      k_.row_starts(row, nx, bits, i0);
+      StartsIn runs(bits, i0 + 1, i0 + nx, last);
       for (std::size_t x = 0; x < nx;) {
-        const std::size_t e = run_end(k_, row, x, nx);
+        const std::size_t e = runs.next() - i0;
         const auto rs = static_cast<std::uint32_t>(i0 + x);
         lab[rs] = rs;
-        mark_start(rs);
         const std::uint8_t v = row[x];
         auto with = [&](std::size_t other0) {  // unites with the run starting at other0 + j
           return [&, other0](std::size_t j) { unite(lab, rs, static_cast<std::uint32_t>(other0 + j)); };
@@ -279,15 +315,15 @@ void Labelling::label_sparse_slab(std::size_t sl) {
           // Neighbours before this run in scan order: row y-1 of this plane and rows y-1..y+1
           // of the plane below, each one voxel wider on both sides.
           const std::size_t lo = x > 0 ? x - 1 : 0, hi = std::min(nx, e + 1);
-          if (y > 0) for_each_run_in(k_, row - nx, v, lo, hi, with(i0 - nx));
+          if (y > 0) for_each_run_in(bits, last, row - nx, i0 - nx, v, lo, hi, with(i0 - nx));
           if (z > zb)
             for (std::size_t yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < ny; ++yy) {
               const std::size_t j0 = nx * (yy + ny * (z - 1));
-              for_each_run_in(k_, s + j0, v, lo, hi, with(j0));
+              for_each_run_in(bits, last, s + j0, j0, v, lo, hi, with(j0));
             }
         } else {
-          if (y > 0) for_each_run_in(k_, row - nx, v, x, e, with(i0 - nx));
-          if (z > zb) for_each_run_in(k_, row - sz, v, x, e, with(i0 - sz));
+          if (y > 0) for_each_run_in(bits, last, row - nx, i0 - nx, v, x, e, with(i0 - nx));
+          if (z > zb) for_each_run_in(bits, last, row - sz, i0 - sz, v, x, e, with(i0 - sz));
         }
         x = e;
       }
@@ -297,8 +333,8 @@ void Labelling::label_sparse_slab(std::size_t sl) {
   // found in their bits, not by scanning the states again.
   std::uint32_t m = 0;
   const std::size_t end = ze * sz;
-  for (std::size_t rs = next_start_in(starts_.data(), zb * sz, end); rs < end;
-       rs = next_start_in(starts_.data(), rs + 1, end)) {
+  StartsIn runs(bits, zb * sz, end, last);
+  for (std::size_t rs = runs.next(); rs < end; rs = runs.next()) {
     const std::uint32_t par = lab[rs];
     if (par == rs) local_state_[sl].push_back(s[rs]);
     lab[rs] = par == rs ? m++ : lab[par];
@@ -341,16 +377,18 @@ void Labelling::label_dense_slab(std::size_t sl) {
         if (rv[c] == kOccupiedState) unite(par.data(), a, c);
     }
   };
+  const std::size_t last = (ze * sz + 7) / 8;  // the slab's run-start bits: bytes before `last`
+  std::uint8_t* const bits = starts_.data();
   for (std::size_t r = 0; r < rows; ++r) {
-    const std::size_t y = r % ny, z = zb + r / ny;
-    const std::uint8_t* row = s_ + nx * (y + ny * z);
+    const std::size_t y = r % ny, z = zb + r / ny, i0 = nx * (y + ny * z);
+    const std::uint8_t* row = s_ + i0;
+    k_.row_starts(row, nx, bits, i0);
     first[r] = static_cast<std::uint32_t>(rx.size());
-    for (std::size_t x = 0; x < nx;) {
-      const std::size_t e = run_end(k_, row, x, nx);
+    StartsIn runs(bits, i0, i0 + nx, last);
+    for (std::size_t x = runs.next() - i0; x < nx; x = runs.next() - i0) {
       par.push_back(static_cast<std::uint32_t>(rx.size()));
       rx.push_back(static_cast<std::uint32_t>(x));
       rv.push_back(row[x]);
-      x = e;
     }
     const auto a0 = first[r], a1 = static_cast<std::uint32_t>(rx.size());
     if (y > 0) {  // row y - 1 of this plane
@@ -369,16 +407,11 @@ void Labelling::label_dense_slab(std::size_t sl) {
   }
   first[rows] = static_cast<std::uint32_t>(rx.size());
   // Local numbering in place: a run's parent is an earlier run of the slab, already renumbered
-  // (the entries are overwritten in index order). Each run start gets its bit; the numbers stay
-  // in the table.
+  // (the entries are overwritten in index order). The numbers stay in the table.
   std::uint32_t m = 0;
-  for (std::size_t r = 0; r < rows; ++r) {
-    const std::size_t i0 = nx * (r % ny + ny * (zb + r / ny));
-    for (std::uint32_t k = first[r]; k < first[r + 1]; ++k) {
-      mark_start(i0 + rx[k]);
-      if (par[k] == k) local_state_[sl].push_back(rv[k]);
-      par[k] = par[k] == k ? m++ : par[par[k]];
-    }
+  for (std::uint32_t k = 0; k < first[rows]; ++k) {
+    if (par[k] == k) local_state_[sl].push_back(rv[k]);
+    par[k] = par[k] == k ? m++ : par[par[k]];
   }
   local_count_[sl] = m;
   row_first_[sl] = std::move(first);
@@ -390,6 +423,7 @@ void Labelling::join_plane(std::size_t sl) {
   const std::size_t z = sl * kLabelSlab;
   const std::size_t last_plane = (kLabelSlab - 1) * ny;  // first row of a full slab's last plane
   const std::uint8_t* const s = s_;
+  const std::uint8_t* const bits = starts_.data();  // every slab's, all set by now
   std::uint32_t* const parent = parent_.data();
   const std::uint32_t above = base_[sl], below = base_[sl - 1];
   for (std::size_t y = 0; y < ny; ++y) {
@@ -397,26 +431,28 @@ void Labelling::join_plane(std::size_t sl) {
     const std::uint8_t *a = s + i0, *b = s + j0;
     // Runs [xa, ea) of this row and [xb, eb) of the row below, stepped along together.
     // (ka, kb: their indices in their rows.)
-    std::size_t xa = 0, xb = 0, ea = run_end(k_, a, 0, nx), eb = run_end(k_, b, 0, nx), ka = 0, kb = 0;
+    StartsIn runs_a(bits, i0 + 1, i0 + nx, starts_.size()), runs_b(bits, j0 + 1, j0 + nx, starts_.size());
+    std::size_t xa = 0, xb = 0, ea = runs_a.next() - i0, eb = runs_b.next() - j0, ka = 0, kb = 0;
     while (true) {
       if (a[xa] == b[xb])
         unite_shared(parent, above + local_at(sl, y, i0, xa, ka), below + local_at(sl - 1, last_plane + y, j0, xb, kb));
       const std::size_t e = std::min(ea, eb);
       if (e == nx) break;
-      if (ea == e) xa = ea, ea = run_end(k_, a, xa, nx), ++ka;
-      if (eb == e) xb = eb, eb = run_end(k_, b, xb, nx), ++kb;
+      if (ea == e) xa = ea, ea = runs_a.next() - i0, ++ka;
+      if (eb == e) xb = eb, eb = runs_b.next() - j0, ++kb;
     }
     if (!occupied26_) continue;
     // Occupied runs of this row also meet occupied voxels of rows y-1..y+1 below across edges
     // and corners: one voxel wider on both sides.
+    StartsIn runs(bits, i0 + 1, i0 + nx, starts_.size());
     for (std::size_t x = 0, ka = 0; x < nx; ++ka) {
-      const std::size_t e = run_end(k_, a, x, nx);
+      const std::size_t e = runs.next() - i0;
       if (a[x] == kOccupiedState) {
         const std::uint32_t ga = above + local_at(sl, y, i0, x, ka);
         const std::size_t lo = x > 0 ? x - 1 : 0, hi = std::min(nx, e + 1);
         for (std::size_t yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < ny; ++yy) {
           const std::size_t k0 = nx * (yy + ny * (z - 1));
-          for_each_run_in(k_, s + k0, kOccupiedState, lo, hi, [&](std::size_t j) {
+          for_each_run_in(bits, starts_.size(), s + k0, k0, kOccupiedState, lo, hi, [&](std::size_t j) {
             unite_shared(parent, ga, below + local_at(sl - 1, last_plane + yy, k0, j));
           });
         }

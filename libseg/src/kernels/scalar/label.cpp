@@ -3,20 +3,10 @@
 
 namespace occseg::kernels::scalar {
 
-std::size_t label_find_state(const std::uint8_t* s, std::uint8_t v, std::size_t x, std::size_t e) {
-  while (x < e && s[x] != v) ++x;
-  return x;
-}
-
-std::size_t label_find_other(const std::uint8_t* s, std::uint8_t v, std::size_t x, std::size_t e) {
-  while (x < e && s[x] == v) ++x;
-  return x;
-}
-
-std::size_t label_run_start(const std::uint8_t* s, std::size_t x) {
-  const std::uint8_t v = s[x];
-  while (x > 0 && s[x - 1] == v) --x;
-  return x;
+void label_row_starts(const std::uint8_t* row, std::size_t nx, std::uint8_t* bits, std::size_t i0) {
+  for (std::size_t x = 0; x < nx; ++x)
+    if (x == 0 || row[x] != row[x - 1])
+      bits[(i0 + x) / 8] = static_cast<std::uint8_t>(bits[(i0 + x) / 8] | (1u << ((i0 + x) % 8)));
 }
 
 std::size_t label_count_runs(const std::uint8_t* s, std::size_t rows, std::size_t nx, std::size_t every) {

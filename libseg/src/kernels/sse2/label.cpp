@@ -7,44 +7,37 @@
 
 namespace occseg::kernels::sse2 {
 
-// Runs of one state are long in real maps: 16 voxels a step.
-std::size_t label_find_state(const std::uint8_t* s, std::uint8_t v, std::size_t x, std::size_t e) {
-  const __m128i vv = _mm_set1_epi8(static_cast<char>(v));
-  while (x + 16 <= e) {
-    const auto m = static_cast<unsigned>(
-        _mm_movemask_epi8(_mm_cmpeq_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(s + x)), vv)));
-    if (m) return x + static_cast<std::size_t>(__builtin_ctz(m));
-    x += 16;
+// 16 voxels a step, whose run-start bits are two whole bytes once the bit index is a multiple
+// of 8 (the voxels before that one by one); voxel 0 of the row is compared with the shifted copy
+// of its own vector (and set), the last few voxels are a vector ending on the row's last voxel.
+void label_row_starts(const std::uint8_t* row, std::size_t nx, std::uint8_t* bits, std::size_t i0) {
+  const auto set = [&](std::size_t x) {
+    bits[(i0 + x) / 8] = static_cast<std::uint8_t>(bits[(i0 + x) / 8] | (1u << ((i0 + x) % 8)));
+  };
+  // Bits of voxels t .. t + 15 (t + 16 <= nx): where a voxel differs from the one before it.
+  const auto starts16 = [&](std::size_t t) -> unsigned {
+    const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + t));
+    const __m128i before = t ? _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + t - 1)) : _mm_slli_si128(v, 1);
+    return (~static_cast<unsigned>(_mm_movemask_epi8(_mm_cmpeq_epi8(v, before))) & 0xFFFFu) | (t ? 0u : 1u);
+  };
+  std::size_t x = 0;
+  if (i0 % 8 || nx < 16) {
+    set(0);
+    for (x = 1; x < nx && (nx < 16 || (i0 + x) % 8); ++x)
+      if (row[x] != row[x - 1]) set(x);
   }
-  while (x < e && s[x] != v) ++x;
-  return x;
-}
-
-std::size_t label_find_other(const std::uint8_t* s, std::uint8_t v, std::size_t x, std::size_t e) {
-  const __m128i vv = _mm_set1_epi8(static_cast<char>(v));
-  while (x + 16 <= e) {
-    const unsigned m = ~static_cast<unsigned>(_mm_movemask_epi8(
-                           _mm_cmpeq_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(s + x)), vv))) &
-                       0xFFFFu;
-    if (m) return x + static_cast<std::size_t>(__builtin_ctz(m));
-    x += 16;
+  for (; x + 16 <= nx; x += 16) {
+    const unsigned m = starts16(x);
+    std::uint8_t* b = bits + (i0 + x) / 8;
+    b[0] = static_cast<std::uint8_t>(b[0] | (m & 0xFFu));
+    b[1] = static_cast<std::uint8_t>(b[1] | (m >> 8));
   }
-  while (x < e && s[x] == v) ++x;
-  return x;
-}
-
-std::size_t label_run_start(const std::uint8_t* s, std::size_t x) {
-  const std::uint8_t v = s[x];
-  const __m128i vv = _mm_set1_epi8(static_cast<char>(v));
-  while (x >= 16) {  // voxels [x - 16, x)
-    const auto m = static_cast<unsigned>(_mm_movemask_epi8(
-                       _mm_cmpeq_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(s + x - 16)), vv))) ^
-                   0xFFFFu;
-    if (m) return x - 16 + static_cast<std::size_t>(32 - __builtin_clz(m));  // past the last other state
-    x -= 16;
+  if (x < nx) {  // 1 to 15 voxels from a whole byte on
+    const unsigned m = starts16(nx - 16) >> (x - (nx - 16));
+    std::uint8_t* b = bits + (i0 + x) / 8;
+    b[0] = static_cast<std::uint8_t>(b[0] | (m & 0xFFu));
+    if (nx - x > 8) b[1] = static_cast<std::uint8_t>(b[1] | (m >> 8));
   }
-  while (x > 0 && s[x - 1] == v) --x;
-  return x;
 }
 
 // The differences are summed with SSE2's sum of absolute differences: baseline x86-64 has no
