@@ -1,7 +1,8 @@
+// Support planes (rules/planes.hpp): a segment's dominant plane by MSAC, and the split of the
+// objects standing on it.
 #include "rules/planes.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
 
