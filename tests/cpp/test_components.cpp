@@ -1,3 +1,4 @@
+// The final labelling (stages/label.hpp): components, their numbering and the segment table.
 #include <gtest/gtest.h>
 
 #include <algorithm>

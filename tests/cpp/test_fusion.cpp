@@ -1,3 +1,5 @@
+// Scan fusion (occseg/fusion.hpp): the inverse sensor model, clipping, threads, cancelling, and
+// every level's ray walk against a plain walk.
 #include <gtest/gtest.h>
 
 #include <algorithm>

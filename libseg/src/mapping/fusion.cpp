@@ -61,8 +61,8 @@ using kernels::Walk;
 // Sets up the traversal of the segment a -> b (grid units: (world - origin) / voxel_size),
 // clipped to the grid box; false when the segment misses the box. The floating-point arithmetic
 // (clipping, tmax, tdelta, and in the kernels' steps the axis choice and tmax updates) is exactly
-// that of the first implementation, so the same voxels are visited; what changed is the
-// bookkeeping.
+// that of the plain walk the tests compare with (reference_trace in tests/cpp/test_fusion.cpp),
+// so the same voxels are visited.
 bool start_walk(const double* a, const double* b, bool hit, const Dims& dims, Walk& w, TouchBox& box) {
   const double n[3] = {double(dims.nx), double(dims.ny), double(dims.nz)};
   double d[3];

@@ -512,7 +512,7 @@ void Labelling::segment_table(const float* p, std::vector<Segment>& segments, in
     Segment& seg = segments[k];
     const double v = static_cast<double>(seg.voxels);
     seg.mop /= v;
-    // Integer coordinate sums are exact; the double sum they replace was exact below 2^53.
+    // Integer coordinate sums are exact (a sum in double would be exact only below 2^53).
     for (int a = 0; a < 3; ++a) seg.centroid[a] = static_cast<double>(coordinate_sum(seg, a)) / v;
   }
 }
