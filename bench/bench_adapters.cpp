@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <string>
 
+#include "kernels/kernels.hpp"
 #include "occseg/pcl_cloud.hpp"
 
 namespace {
@@ -58,11 +59,10 @@ void BM_Occseg(benchmark::State& state) {
   state.counters["voxels"] = static_cast<double>(frame.dims.count());
 }
 
-// The same with the portable SSE2 ray walk (what a processor without AVX2 runs), for the ratio.
+// The same with the kernels capped at SSE2 (what a processor without AVX2 runs), for the ratio.
 void BM_OccsegSse2(benchmark::State& state) {
-  occseg::detail::set_vector_walk(false);
+  occseg::kernels::ScopedIsa sse2(occseg::kernels::Isa::sse2);
   BM_Occseg(state);
-  occseg::detail::set_vector_walk(true);
 }
 
 void BM_Octomap(benchmark::State& state) {

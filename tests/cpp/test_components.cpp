@@ -1,13 +1,16 @@
+// The final labelling (stages/label.hpp): components, their numbering and the segment table.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 
-#include "stages/label.hpp"
+#include "isa_levels.hpp"
 #include "occseg/error.hpp"
 #include "pipeline/segment_internal.hpp"
+#include "stages/label.hpp"
 
 using namespace occseg;
+using occseg::testing_isa::for_each_isa;
 
 TEST(Components, LabelsInScanOrderWithStats) {
   Grid g(Dims{4, 3, 1}, 0.2f);
@@ -156,12 +159,21 @@ double lane_sum(const float* v, std::size_t n) {
   return ((l[0] + l[1]) + (l[2] + l[3])) + ((l[4] + l[5]) + (l[6] + l[7]));
 }
 
+void runs_are_summed_in_eight_lanes();
+
 }  // namespace
 
 // A run (a stretch of one segment along x) is summed in eight lanes: with a 1.0 first and
 // quarter-ulp values after it, the serial sum stays 1.0 while the lanes keep the small values.
-// Runs of every length up to 40 (the vector loop and its tail), then values over many binades.
+// Runs of every length up to 40 (the vector loop and its tail), then values over many binades;
+// every level's kernels.
 TEST(Components, RunsAreSummedInEightLanes) {
+  EXPECT_GE(for_each_isa([](kernels::Isa) { runs_are_summed_in_eight_lanes(); }), 2);
+}
+
+namespace {
+
+void runs_are_summed_in_eight_lanes() {
   for (std::size_t len = 1; len <= 40; ++len) {
     const Dims d{len, 1, 1};
     Grid g(d, std::ldexp(1.0f, -54));
@@ -202,6 +214,8 @@ TEST(Components, RunsAreSummedInEightLanes) {
   ASSERT_EQ(segs.size(), 3u);  // the occupied bar and the free space on either side of it
   for (std::size_t k = 0; k < segs.size(); ++k) EXPECT_EQ(segs[k].mop, sum[k] / double(segs[k].voxels)) << k;
 }
+
+}  // namespace
 
 // The run sums are added in scan order within each slab and the slab shares in slab order,
 // whichever thread finishes which slab first. Here slab 0 is expensive (random states, many runs)
@@ -306,7 +320,8 @@ TEST(Components, ReusedRunStartStorageIsClearedFirst) {
   const std::uint8_t* storage = run_starts.data();
   LabelArray got(d.count(), 0u);
   std::vector<Segment> got_segs;
-  detail::label_components(UninitVector<std::uint8_t>(st.begin(), st.end()), g, got, got_segs, 2, true, run_starts);
+  detail::label_components(UninitVector<std::uint8_t>(st.begin(), st.end()), g, got, got_segs, 2, true, run_starts,
+                           kernels::active());
   EXPECT_TRUE(std::equal(got.begin(), got.end(), want.begin(), want.end()));
   ASSERT_EQ(got_segs.size(), want_segs.size());
   for (std::size_t k = 0; k < want_segs.size(); ++k) EXPECT_EQ(got_segs[k].voxels, want_segs[k].voxels) << k;

@@ -1,3 +1,5 @@
+// Scan fusion (occseg/fusion.hpp): the inverse sensor model, clipping, threads, cancelling, and
+// every level's ray walk against a plain walk.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -5,10 +7,12 @@
 #include <limits>
 #include <random>
 
+#include "isa_levels.hpp"
 #include "occseg/error.hpp"
 #include "occseg/fusion.hpp"
 
 using namespace occseg;
+using occseg::testing_isa::for_each_isa;
 
 namespace {
 GridFrame frame(std::size_t nx, std::size_t ny, std::size_t nz, double vs = 0.1) {
@@ -256,14 +260,9 @@ void reference_scan(const GridFrame& f, const SensorModel& m, const Vec3& s, con
 }
 }  // namespace
 
-// Both walks: AVX2 lanes (where the processor has AVX2) and the portable SSE2 one.
-class FusionWalk : public ::testing::TestWithParam<bool> {
- protected:
-  void SetUp() override { detail::set_vector_walk(GetParam()); }
-  void TearDown() override { detail::set_vector_walk(true); }
-};
-INSTANTIATE_TEST_SUITE_P(Fusion, FusionWalk, ::testing::Values(true, false),
-                         [](const auto& info) { return info.param ? "vector" : "sse2"; });
+// Every level's walk: the plain one, SSE2, and AVX2 lanes where the processor has AVX2.
+class FusionWalk : public occseg::testing_isa::IsaTest {};
+OCCSEG_INSTANTIATE_ISA_LEVELS(FusionWalk);
 
 TEST_P(FusionWalk, OptimisedWalkMatchesThePlainWalkOnRandomRays) {
   std::mt19937_64 rng(12345);
@@ -315,8 +314,9 @@ TEST_P(FusionWalk, OptimisedWalkMatchesThePlainWalkOnRandomRays) {
 }
 
 // Exact ties in the axis choice (rays through voxel edges and corners), where the plain walk above
-// is not a reliable judge (see docs/performance.md): the AVX2 and SSE2 walks must still agree.
-TEST(Fusion, VectorAndSse2WalksAgreeOnTies) {
+// is not a reliable judge (see docs/performance.md): every level's walk must agree with the
+// scalar kernel's, which makes the same IEEE operations one ray at a time.
+TEST(Fusion, EveryLevelsWalkAgreesOnTies) {
   std::mt19937_64 rng(777);
   std::uniform_int_distribution<int> cell(-12, 12);
   const GridFrame f = frame(24, 24, 24, 0.125);  // origin 0, power-of-two voxel: exact offsets
@@ -330,21 +330,24 @@ TEST(Fusion, VectorAndSse2WalksAgreeOnTies) {
     if ((r / 6) % 2) p[(r + 2) % 3] += (r / 12) % 2 ? t : q;
     pts.push_back(p);
   }
-  std::vector<float> grids[2];
-  for (bool vector_walk : {true, false}) {
-    detail::set_vector_walk(vector_walk);
+  std::vector<float> scalar;
+  {
+    kernels::ScopedIsa plain(kernels::Isa::scalar);
+    OccupancyFusion fu(f);
+    fu.insert_scan(s, pts, 1);
+    scalar = fu.log_odds();
+  }
+  std::size_t touched = 0;
+  for (float l : scalar) touched += l != 0.0f;
+  EXPECT_GT(touched, 1000u);
+  const int levels = for_each_isa([&](kernels::Isa) {
     for (int threads : {1, 2}) {
       OccupancyFusion fu(f);
       fu.insert_scan(s, pts, threads);
-      if (threads == 1) grids[vector_walk] = fu.log_odds();
-      else EXPECT_EQ(fu.log_odds(), grids[vector_walk]) << vector_walk;
+      EXPECT_EQ(fu.log_odds(), scalar) << threads << " threads";
     }
-  }
-  detail::set_vector_walk(true);
-  std::size_t touched = 0;
-  for (float l : grids[0]) touched += l != 0.0f;
-  EXPECT_GT(touched, 1000u);
-  EXPECT_EQ(grids[1], grids[0]);
+  });
+  EXPECT_GE(levels, 2);
 }
 
 // Marks set before a cancel must not leak into the next scan (marks are cleared per scan only

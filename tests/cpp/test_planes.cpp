@@ -8,10 +8,12 @@
 #include <functional>
 #include <set>
 
-#include "rules/planes.hpp"
+#include "isa_levels.hpp"
 #include "occseg/segment.hpp"
+#include "rules/planes.hpp"
 
 using namespace occseg;
+using occseg::testing_isa::for_each_isa;
 
 namespace {
 
@@ -102,11 +104,11 @@ TEST(Planes, FitFindsTheDominantPlaneAndCountsItsInliers) {
   EXPECT_FALSE(fit_dominant_plane({{0, 0, 0}, {1, 1, 1}, {2, 2, 2}, {3, 3, 3}}, 1, pl, inliers));
 }
 
-// The cost of a candidate plane, bit for bit: the AVX2 code (four points at a time) and the
-// scalar code against the documented sum written out here, on points with non-integer
-// coordinates (other orders of the additions, or of the terms of a distance, round differently)
-// and 1 to 600 of them (the vector loop, its tail, the looks at the bound every 256 points).
-TEST(Planes, CostIsTheDocumentedSumOnBothKernels) {
+// The cost of a candidate plane, bit for bit: every level's kernels (AVX2: four points at a time)
+// against the documented sum written out here, on points with non-integer coordinates (other
+// orders of the additions, or of the terms of a distance, round differently) and 1 to 600 of
+// them (the vector loop, its tail, the looks at the bound every 256 points).
+TEST(Planes, CostIsTheDocumentedSumAtEveryLevel) {
   Uniform uniform(9);
   int differs_from_serial = 0;
   for (std::size_t n : {1, 3, 4, 7, 255, 256, 257, 600}) {
@@ -130,29 +132,28 @@ TEST(Planes, CostIsTheDocumentedSumOnBothKernels) {
       // bound, a sum at or above it once the cost reaches it.
       Plane other = pl;
       other.d = pl.d - 2.5;
-      const double other_cost = detail::msac_cost(pts, other);
-      for (bool vector : {true, false}) {
-        detail::set_vector_planes(vector);
-        EXPECT_EQ(detail::msac_cost(pts, pl), want) << n << " points, plane " << k << ", vector " << vector;
+      const double other_cost = detail::msac_cost(pts, other, kernels::table(kernels::Isa::scalar));
+      const int levels = for_each_isa([&](kernels::Isa) {
+        EXPECT_EQ(detail::msac_cost(pts, pl), want) << n << " points, plane " << k;
         double a = 0, b = 0;
         detail::msac_cost_pair(pts, pl, other, std::numeric_limits<double>::infinity(), a, b);
-        EXPECT_EQ(a, want) << n << " points, plane " << k << ", vector " << vector;
-        EXPECT_EQ(b, other_cost) << n << " points, plane " << k << ", vector " << vector;
+        EXPECT_EQ(a, want) << n << " points, plane " << k;
+        EXPECT_EQ(b, other_cost) << n << " points, plane " << k;
         detail::msac_cost_pair(pts, other, pl, std::numeric_limits<double>::infinity(), b, a);
-        EXPECT_EQ(a, want) << n << " points, plane " << k << ", vector " << vector;
+        EXPECT_EQ(a, want) << n << " points, plane " << k;
         const double stop = 0.5 * (want + other_cost);  // one of them stops early (unless equal)
         detail::msac_cost_pair(pts, pl, other, stop, a, b);
-        EXPECT_TRUE(want < stop ? a == want : a >= stop) << n << " points, plane " << k << ", vector " << vector;
+        EXPECT_TRUE(want < stop ? a == want : a >= stop) << n << " points, plane " << k;
         EXPECT_TRUE(other_cost < stop ? b == other_cost : b >= stop) << n << " points, plane " << k;
-      }
-      detail::set_vector_planes(true);
+      });
+      EXPECT_GE(levels, 2);
     }
   }
   EXPECT_GT(differs_from_serial, 5);  // the data tell the lanes from one serial sum
 }
 
 // The candidate planes are scored in batches over threads, then taken in draw order: the same
-// plane, bit for bit, for any thread count, and with the AVX2 or the scalar cost. Noisy planes
+// plane, bit for bit, for any thread count, and with every level's cost kernels. Noisy planes
 // holding 35 % to 95 % of the points (the adaptive stop then ends anywhere from 13 to all 256
 // draws) among uniform outliers, below and above the 4096-point sample, with non-integer
 // coordinates (their costs round differently in any other order of additions).
@@ -169,18 +170,18 @@ TEST(Planes, FitIsTheSameForAnyThreadCount) {
       }
       Plane one;
       std::size_t in1 = 0;
-      ASSERT_TRUE(fit_dominant_plane(pts, 99 + n, one, in1, 1));
+      ASSERT_TRUE(fit_dominant_plane(pts, 99 + n, one, in1, 1, kernels::table(kernels::Isa::scalar)));
       EXPECT_GT(in1, share * n * 0.8) << share << " " << n;  // it found the plane
-      for (int t : {2, 3, 0, -1}) {  // -1: one thread, scalar cost
-        detail::set_vector_planes(t >= 0);
-        Plane pl;
-        std::size_t in = 0;
-        ASSERT_TRUE(fit_dominant_plane(pts, 99 + n, pl, in, std::max(t, 1)));
-        detail::set_vector_planes(true);
-        EXPECT_EQ(pl.n, one.n) << share << " " << n << " threads " << t;
-        EXPECT_EQ(pl.d, one.d) << share << " " << n << " threads " << t;
-        EXPECT_EQ(in, in1);
-      }
+      for_each_isa([&](kernels::Isa) {
+        for (int t : {1, 2, 3, 0}) {
+          Plane pl;
+          std::size_t in = 0;
+          ASSERT_TRUE(fit_dominant_plane(pts, 99 + n, pl, in, t));
+          EXPECT_EQ(pl.n, one.n) << share << " " << n << " threads " << t;
+          EXPECT_EQ(pl.d, one.d) << share << " " << n << " threads " << t;
+          EXPECT_EQ(in, in1);
+        }
+      });
       ++searched;
     }
   EXPECT_EQ(searched, 8);
@@ -188,8 +189,8 @@ TEST(Planes, FitIsTheSameForAnyThreadCount) {
 
 // Several candidates: their planes are searched at once on more threads, then split one after
 // the other. Three shelves (floors at z = 2, 8, 14 over separate x ranges, unseen below) each
-// with a box on it, and a lone box: the same labels and segments for 1, 2 and 3 threads, and each
-// shelf's box split off.
+// with a box on it, and a lone box: the same labels and segments for 1, 2 and 3 threads at every
+// level of the kernels, and each shelf's box split off.
 TEST(Planes, SeveralCandidatesSplitTheSameForAnyThreadCount) {
   auto shelves = [](int x, int y, int z) {
     for (int k = 0; k < 3; ++k) {
@@ -207,20 +208,20 @@ TEST(Planes, SeveralCandidatesSplitTheSameForAnyThreadCount) {
   ASSERT_EQ(one.segments.size(), one.before + 3) << "a box split off each shelf";
   for (int k = 0; k < 3; ++k)
     EXPECT_NE(one.at(20 * k + 7, 7, 3 + 6 * k), one.at(20 * k + 1, 1, 2 + 6 * k)) << "shelf " << k;
-  for (int threads : {2, 3, -1}) {  // -1: one thread, the scalar code (costs, box scans)
-    Scene s(d, shelves);
-    label_components(s.states, s.grid, s.labels, s.segments, 1, true);
-    detail::set_vector_planes(threads > 0);
-    split_support_planes(s.grid, s.labels, s.segments, 200, true, std::max(threads, 1));
-    detail::set_vector_planes(true);
-    EXPECT_EQ(s.labels, one.labels) << threads << " threads";
-    ASSERT_EQ(s.segments.size(), one.segments.size());
-    for (std::size_t i = 0; i < s.segments.size(); ++i) {
-      EXPECT_EQ(s.segments[i].voxels, one.segments[i].voxels) << i;
-      EXPECT_EQ(s.segments[i].mop, one.segments[i].mop) << i;
-      EXPECT_EQ(s.segments[i].centroid, one.segments[i].centroid) << i;
+  for_each_isa([&](kernels::Isa) {  // every level's costs and box scans
+    for (int threads : {1, 2, 3}) {
+      Scene s(d, shelves);
+      label_components(s.states, s.grid, s.labels, s.segments, 1, true);
+      split_support_planes(s.grid, s.labels, s.segments, 200, true, threads);
+      EXPECT_EQ(s.labels, one.labels) << threads << " threads";
+      ASSERT_EQ(s.segments.size(), one.segments.size());
+      for (std::size_t i = 0; i < s.segments.size(); ++i) {
+        EXPECT_EQ(s.segments[i].voxels, one.segments[i].voxels) << i;
+        EXPECT_EQ(s.segments[i].mop, one.segments[i].mop) << i;
+        EXPECT_EQ(s.segments[i].centroid, one.segments[i].centroid) << i;
+      }
     }
-  }
+  });
 }
 
 TEST(Planes, BoxStandingOnAFloorBecomesItsOwnSegment) {

@@ -477,8 +477,8 @@ TEST(Reference, VoxelRulesMatchOnRandomStates) {
 // (their first planes are joined on several threads at once), runs of 1 to 120 voxels of one
 // state (slabs labelled with a table of their runs, which keeps their local numbers until the
 // statistics), of 1 to 40 (tables and the label array, slab by slab) and of 1 to 6 (slabs labelled
-// through the label array), 6- and 26-connectivity, 1 to 4 threads. Labels and the whole segment
-// table must match.
+// through the label array), 6- and 26-connectivity, 1 to 4 threads, every level of the kernels.
+// Labels and the whole segment table must match.
 TEST(Reference, LabellingMatchesOnRandomStatesAcrossManySlabs) {
   const Dims dims[] = {{41, 29, 70}, {70, 3, 129}, {5, 60, 41}, {130, 17, 33}};
   std::uint64_t seed = 7;
@@ -501,16 +501,19 @@ TEST(Reference, LabellingMatchesOnRandomStatesAcrossManySlabs) {
         LabelArray want;
         std::vector<Segment> want_segs;
         reference::label(st, g, want, want_segs, occupied26);
-        for (int threads : {1, 2, 3, 4}) {
-          LabelArray got;
-          std::vector<Segment> got_segs;
-          label_components(st, g, got, got_segs, threads, occupied26);
-          const std::string what = std::to_string(d.nx) + "x" + std::to_string(d.ny) + "x" + std::to_string(d.nz) +
-                                   (occupied26 ? " 26" : " 6") + " threads " + std::to_string(threads) + " runs up to " +
-                                   std::to_string(static_cast<int>(longest));
-          EXPECT_TRUE(std::equal(got.begin(), got.end(), want.begin(), want.end())) << what;
-          expect_same_segments(got_segs, want_segs, what);
-        }
+        testing_isa::for_each_isa([&](kernels::Isa level) {
+          for (int threads : {1, 2, 3, 4}) {
+            LabelArray got;
+            std::vector<Segment> got_segs;
+            label_components(st, g, got, got_segs, threads, occupied26);
+            const std::string what = std::to_string(d.nx) + "x" + std::to_string(d.ny) + "x" +
+                                     std::to_string(d.nz) + (occupied26 ? " 26" : " 6") + " threads " +
+                                     std::to_string(threads) + " runs up to " +
+                                     std::to_string(static_cast<int>(longest)) + " " + kernels::isa_name(level);
+            EXPECT_TRUE(std::equal(got.begin(), got.end(), want.begin(), want.end())) << what;
+            expect_same_segments(got_segs, want_segs, what);
+          }
+        });
       }
     }
 }

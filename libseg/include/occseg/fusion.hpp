@@ -73,12 +73,6 @@ class OccupancyFusion {
   Progress progress_;
 };
 
-namespace detail {
-// For tests and benchmarks: false makes every OccupancyFusion walk rays with the portable SSE2
-// code even where the processor has AVX2 (both give bit-identical grids). Process-wide.
-void set_vector_walk(bool enabled);
-}  // namespace detail
-
 // The frame (origin and dims) of the smallest voxel-aligned box that holds all the points and
 // the sensor positions, padded by `margin` metres.
 GridFrame fit_frame(const std::vector<Vec3>& points, double voxel_size, double margin = 0.0);

@@ -1,32 +1,23 @@
+// Scan fusion into an occupancy grid (occseg/fusion.hpp): rays set up here, walked by the kernels.
 #include "occseg/fusion.hpp"
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstring>
-#include <emmintrin.h>
-#include <immintrin.h>
 #include <limits>
 #include <mutex>
 
 #include "occseg/error.hpp"
+#include "kernels/kernels.hpp"
 #include "occseg/parallel.hpp"
-#include "kernels/cpu_features.hpp"
 #include "util/huge_pages.hpp"
 
 namespace occseg {
 
 namespace {
 double logit(double p) { return std::log(p / (1 - p)); }
-std::atomic<bool> g_vector_walk{true};
-// The AVX2 walk where the processor has AVX2 (checked at run time: the library is built for
-// generic x86-64) and no test asked for the SSE2 one.
-[[maybe_unused]] bool use_avx2() { return cpu_has_avx2() && g_vector_walk.load(std::memory_order_relaxed); }
 }  // namespace
-
-namespace detail {
-void set_vector_walk(bool enabled) { g_vector_walk.store(enabled, std::memory_order_relaxed); }
-}  // namespace detail
 
 void SensorModel::validate() const {
   auto in01 = [](const char* name, double v) {
@@ -63,52 +54,15 @@ OccupancyFusion::OccupancyFusion(const GridFrame& frame, const SensorModel& mode
 
 namespace {
 
-// Voxels a scan may have marked: per axis, the range between the first and the last cell of
-// every walk (walks are monotone along each axis). The apply pass only visits this box.
-struct TouchBox {
-  long lo[3] = {std::numeric_limits<long>::max(), std::numeric_limits<long>::max(),
-                std::numeric_limits<long>::max()};
-  long hi[3] = {-1, -1, -1};
-  void add(const long* c) {
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = std::min(lo[k], c[k]);
-      hi[k] = std::max(hi[k], c[k]);
-    }
-  }
-  void merge(const TouchBox& o) {
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = std::min(lo[k], o.lo[k]);
-      hi[k] = std::max(hi[k], o.hi[k]);
-    }
-  }
-  bool empty() const { return hi[0] < lo[0]; }
-};
-
-// Marks one voxel as crossed. While rays are walked only this value is ever written (hits are
-// collected in lists and written after every walk is done, see insert_scan), so concurrent
-// walks need no locked read-modify-write: a relaxed load and, on an unmarked voxel, a relaxed
-// store. Reading first keeps the cache line shared between threads where many rays cross (near
-// the sensor) instead of bouncing it with stores.
-inline void mark_crossed(std::uint8_t* m) {
-  if (__atomic_load_n(m, __ATOMIC_RELAXED) == 0) __atomic_store_n(m, std::uint8_t(1), __ATOMIC_RELAXED);
-}
-
-// One Amanatides & Woo voxel traversal in progress. Each step depends on the previous one (compare
-// tmax, add tdelta: about 9 cycles of latency for a few instructions), so rays are walked several
-// at a time, one step each in turn, and the processor overlaps their chains.
-struct Walk {
-  __m128d tx, ty, tz, dx, dy, dz;  // tmax and tdelta per axis, in the low lane
-  std::uint64_t i, end, sx, sy, sz;  // voxel index, end voxel index, index strides of one step
-  long rx, ry, rz, budget;          // steps left along each axis inside the grid; steps left
-  long c0[3], room[3], step[3];     // start voxel, initial room, step signs (for the touched box)
-  bool hit;                         // the end voxel holds a return (else it is only crossed)
-  bool at_end;                      // the walk stopped on its end voxel (set when it is over)
-};
+// The walks' state and the kernels that walk them (kernels/fusion.hpp).
+using kernels::TouchBox;
+using kernels::Walk;
 
 // Sets up the traversal of the segment a -> b (grid units: (world - origin) / voxel_size),
 // clipped to the grid box; false when the segment misses the box. The floating-point arithmetic
-// (clipping, tmax, tdelta, and in step() the axis choice and tmax updates) is exactly that of
-// the first implementation, so the same voxels are visited; what changed is the bookkeeping.
+// (clipping, tmax, tdelta, and in the kernels' steps the axis choice and tmax updates) is exactly
+// that of the plain walk the tests compare with (reference_trace in tests/cpp/test_fusion.cpp),
+// so the same voxels are visited.
 bool start_walk(const double* a, const double* b, bool hit, const Dims& dims, Walk& w, TouchBox& box) {
   const double n[3] = {double(dims.nx), double(dims.ny), double(dims.nz)};
   double d[3];
@@ -166,159 +120,13 @@ bool start_walk(const double* a, const double* b, bool hit, const Dims& dims, Wa
   w.rx = w.room[0];
   w.ry = w.room[1];
   w.rz = w.room[2];
-  w.tx = _mm_set_sd(tmax[0]);
-  w.ty = _mm_set_sd(tmax[1]);
-  w.tz = _mm_set_sd(tmax[2]);
-  w.dx = _mm_set_sd(tdelta[0]);
-  w.dy = _mm_set_sd(tdelta[1]);
-  w.dz = _mm_set_sd(tdelta[2]);
+  w.tx[0] = tmax[0], w.ty[0] = tmax[1], w.tz[0] = tmax[2];
+  w.dx[0] = tdelta[0], w.dy[0] = tdelta[1], w.dz[0] = tdelta[2];
+  w.tx[1] = w.ty[1] = w.tz[1] = w.dx[1] = w.dy[1] = w.dz[1] = 0;
   w.hit = end_inside;
   w.at_end = false;
   return true;
 }
-
-// Marks the current voxel crossed and moves one voxel on; false when the walk is over (at_end
-// tells whether it stopped on its end voxel). The axis is chosen with compare masks, not
-// branches (the choice is a coin flip on oblique rays), and each tmax gets + tdelta or + 0.0,
-// which leaves it unchanged.
-inline bool step(Walk& w, std::uint8_t* marks) {
-  mark_crossed(marks + w.i);
-  if (w.i == w.end) {
-    w.at_end = true;
-    return false;
-  }
-  // Same choice as tmax[0] < tmax[1] ? (tmax[0] < tmax[2] ? 0 : 2) : (tmax[1] < tmax[2] ? 1 : 2).
-  const __m128d xy = _mm_cmplt_sd(w.tx, w.ty), xz = _mm_cmplt_sd(w.tx, w.tz), yz = _mm_cmplt_sd(w.ty, w.tz);
-  const __m128d mx = _mm_and_pd(xy, xz), my = _mm_andnot_pd(xy, yz);
-  const __m128d mz = _mm_andnot_pd(_mm_or_pd(mx, my), _mm_castsi128_pd(_mm_set1_epi32(-1)));
-  w.tx = _mm_add_sd(w.tx, _mm_and_pd(mx, w.dx));
-  w.ty = _mm_add_sd(w.ty, _mm_and_pd(my, w.dy));
-  w.tz = _mm_add_sd(w.tz, _mm_and_pd(mz, w.dz));
-  const std::int64_t kx = _mm_cvtsi128_si64(_mm_castpd_si128(mx));  // 0 or -1
-  const std::int64_t ky = _mm_cvtsi128_si64(_mm_castpd_si128(my));
-  const std::int64_t kz = _mm_cvtsi128_si64(_mm_castpd_si128(mz));
-  w.i += (w.sx & static_cast<std::uint64_t>(kx)) | (w.sy & static_cast<std::uint64_t>(ky)) |
-         (w.sz & static_cast<std::uint64_t>(kz));
-  w.rx += kx;
-  w.ry += ky;
-  w.rz += kz;
-  if ((w.rx | w.ry | w.rz) < 0) return false;
-  return --w.budget > 0;
-}
-
-// Adds the voxels a finished walk covered to the box: walks are monotone along each axis, and
-// went no further than the steps they took (a step out of the grid was counted, not taken). A
-// walk that reached its end voxel with a return lists it in `hits`.
-void finish_walk(const Walk& w, const Dims& dims, TouchBox& box, std::vector<std::uint64_t>& hits) {
-  const long moved[3] = {w.room[0] - w.rx, w.room[1] - w.ry, w.room[2] - w.rz};
-  const long n[3] = {static_cast<long>(dims.nx), static_cast<long>(dims.ny), static_cast<long>(dims.nz)};
-  long fin[3];
-  for (int k = 0; k < 3; ++k) fin[k] = std::clamp(w.c0[k] + w.step[k] * moved[k], 0L, n[k] - 1);
-  box.add(fin);
-  if (w.at_end && w.hit) hits.push_back(w.end);
-}
-
-#if defined(__x86_64__) && defined(__GNUC__)
-#define OCCSEG_FUSION_AVX2 1
-// Four walks in the four lanes of AVX2 registers, one step of each per iteration: the same IEEE
-// operations as step() (LT_OS compares, masked adds of tdelta), so the same voxels, at about a
-// quarter of the instructions per voxel step (two groups of four lanes per iteration were slower:
-// register spills). Lanes go to memory only when one of them ends (about once per hundred steps).
-// All lanes start live; `refill(k)` starts the next ray in w[k] and returns false when there is
-// none: then live[k] turns false and the function returns, leaving the walks still going in `w`
-// for step() to finish.
-constexpr int kVectorLanes = 4;
-
-struct alignas(32) Lanes {
-  double tx[kVectorLanes], ty[kVectorLanes], tz[kVectorLanes], dx[kVectorLanes], dy[kVectorLanes], dz[kVectorLanes];
-  std::int64_t i[kVectorLanes], end[kVectorLanes], sx[kVectorLanes], sy[kVectorLanes], sz[kVectorLanes];
-  std::int64_t rx[kVectorLanes], ry[kVectorLanes], rz[kVectorLanes], budget[kVectorLanes];
-  void put(int k, const Walk& w) {
-    // Memory forms only: Valgrind (3.19) cannot decode the register form of VEX movq that
-    // _mm_set_sd / _mm_cvtsd_f64 may compile to, and users run their programs under it.
-    _mm_store_sd(tx + k, w.tx), _mm_store_sd(ty + k, w.ty), _mm_store_sd(tz + k, w.tz);
-    _mm_store_sd(dx + k, w.dx), _mm_store_sd(dy + k, w.dy), _mm_store_sd(dz + k, w.dz);
-    i[k] = std::int64_t(w.i), end[k] = std::int64_t(w.end);
-    sx[k] = std::int64_t(w.sx), sy[k] = std::int64_t(w.sy), sz[k] = std::int64_t(w.sz);
-    rx[k] = w.rx, ry[k] = w.ry, rz[k] = w.rz, budget[k] = w.budget;
-  }
-  void get(int k, Walk& w) const {
-    w.tx = _mm_load_sd(tx + k), w.ty = _mm_load_sd(ty + k), w.tz = _mm_load_sd(tz + k);
-    w.dx = _mm_load_sd(dx + k), w.dy = _mm_load_sd(dy + k), w.dz = _mm_load_sd(dz + k);
-    w.i = std::uint64_t(i[k]), w.end = std::uint64_t(end[k]);
-    w.sx = std::uint64_t(sx[k]), w.sy = std::uint64_t(sy[k]), w.sz = std::uint64_t(sz[k]);
-    w.rx = rx[k], w.ry = ry[k], w.rz = rz[k], w.budget = budget[k];
-  }
-};
-
-// Four 64-bit lanes of a Lanes field (lambdas would not inherit the target attribute).
-__attribute__((target("avx2"))) inline __m256i load(const std::int64_t* f) {
-  return _mm256_load_si256(reinterpret_cast<const __m256i*>(f));
-}
-__attribute__((target("avx2"))) inline void store(std::int64_t* f, __m256i v) {
-  _mm256_store_si256(reinterpret_cast<__m256i*>(f), v);
-}
-
-template <typename Refill>
-__attribute__((target("avx2"))) void walk_vector_avx2(Walk (&w)[kVectorLanes], bool (&live)[kVectorLanes],
-                                                      std::uint8_t* marks, const Dims& dims, TouchBox& box,
-                                                      std::vector<std::uint64_t>& hits, Refill&& refill) {
-  Lanes L;
-  for (int k = 0; k < kVectorLanes; ++k) L.put(k, w[k]);
-  const __m256i ones = _mm256_set1_epi64x(-1), zero = _mm256_setzero_si256();
-  for (;;) {
-    __m256d tx = _mm256_load_pd(L.tx), ty = _mm256_load_pd(L.ty), tz = _mm256_load_pd(L.tz);
-    const __m256d dx = _mm256_load_pd(L.dx), dy = _mm256_load_pd(L.dy), dz = _mm256_load_pd(L.dz);
-    __m256i i = load(L.i), rx = load(L.rx), ry = load(L.ry), rz = load(L.rz), budget = load(L.budget);
-    const __m256i end = load(L.end), sx = load(L.sx), sy = load(L.sy), sz = load(L.sz);
-    int done = 0, eqm = 0;
-    while (!done) {
-      alignas(32) std::uint64_t at[4];
-      _mm256_store_si256(reinterpret_cast<__m256i*>(at), i);
-      const __m256i eq = _mm256_cmpeq_epi64(i, end);
-      eqm = _mm256_movemask_pd(_mm256_castsi256_pd(eq));  // lanes on their end voxel: over
-      for (int k = 0; k < 4; ++k) mark_crossed(marks + at[k]);
-      const __m256d xy = _mm256_cmp_pd(tx, ty, _CMP_LT_OS), xz = _mm256_cmp_pd(tx, tz, _CMP_LT_OS);
-      const __m256d yz = _mm256_cmp_pd(ty, tz, _CMP_LT_OS);
-      const __m256d mx = _mm256_and_pd(xy, xz), my = _mm256_andnot_pd(xy, yz);
-      const __m256d mz = _mm256_andnot_pd(_mm256_or_pd(mx, my), _mm256_castsi256_pd(ones));
-      // A lane at its end voxel is over (step() returns before moving); its tmax and index are
-      // not used again, only its room counters must not move.
-      tx = _mm256_add_pd(tx, _mm256_and_pd(mx, dx));
-      ty = _mm256_add_pd(ty, _mm256_and_pd(my, dy));
-      tz = _mm256_add_pd(tz, _mm256_and_pd(mz, dz));
-      const __m256i kx = _mm256_andnot_si256(eq, _mm256_castpd_si256(mx));
-      const __m256i ky = _mm256_andnot_si256(eq, _mm256_castpd_si256(my));
-      const __m256i kz = _mm256_andnot_si256(eq, _mm256_castpd_si256(mz));
-      i = _mm256_add_epi64(i, _mm256_or_si256(_mm256_or_si256(_mm256_and_si256(sx, kx), _mm256_and_si256(sy, ky)),
-                                              _mm256_and_si256(sz, kz)));
-      rx = _mm256_add_epi64(rx, kx);
-      ry = _mm256_add_epi64(ry, ky);
-      rz = _mm256_add_epi64(rz, kz);
-      budget = _mm256_add_epi64(budget, ones);
-      const __m256i out = _mm256_or_si256(_mm256_or_si256(rx, ry), rz);  // sign: left the grid
-      const __m256i over = _mm256_or_si256(_mm256_or_si256(eq, _mm256_cmpeq_epi64(budget, zero)), out);
-      done = _mm256_movemask_pd(_mm256_castsi256_pd(over));
-    }
-    _mm256_store_pd(L.tx, tx), _mm256_store_pd(L.ty, ty), _mm256_store_pd(L.tz, tz);
-    store(L.i, i), store(L.rx, rx), store(L.ry, ry), store(L.rz, rz), store(L.budget, budget);
-    bool all_live = true;
-    for (int k = 0; k < kVectorLanes; ++k) {
-      if (!(done >> k & 1)) continue;
-      L.get(k, w[k]);
-      w[k].at_end = eqm >> k & 1;
-      finish_walk(w[k], dims, box, hits);
-      if (refill(k)) L.put(k, w[k]);
-      else live[k] = all_live = false;
-    }
-    if (!all_live) {
-      for (int k = 0; k < kVectorLanes; ++k)
-        if (live[k] && !(done >> k & 1)) L.get(k, w[k]);
-      return;
-    }
-  }
-}
-#endif
 
 // Calls fn(row start index, x0, x1) for every x-row of the box, rows spread over threads.
 template <typename Fn>
@@ -371,51 +179,15 @@ void OccupancyFusion::insert_scan(const Vec3& sensor, const float* xyz, std::siz
     for (int k = 0; k < 3; ++k) b[k] = (end[k] - frame_.origin[k]) / vs;
     return start_walk(a, b, hit, frame_.dims, w, box);
   };
-  // Walks rays [r, e) several at a time; a lane whose walk ends takes the next ray.
-  constexpr int kLanes = 4;  // the SSE2 walk interleaves 4 rays
-#ifdef OCCSEG_FUSION_AVX2
-  constexpr int kSlots = kVectorLanes > kLanes ? kVectorLanes : kLanes;
-  const bool avx2 = use_avx2();
-#else
-  constexpr int kSlots = kLanes;
-  const bool avx2 = false;
-#endif
+  // Walks rays [r, e) with the kernels of this call (several at a time, depending on the level).
+  const kernels::FusionKernels& kernel = kernels::active().fusion;
   auto walk_rays = [&](std::size_t r, std::size_t e, TouchBox& box, std::vector<std::uint64_t>& hits) {
-    Walk lanes[kSlots];
-    bool busy[kSlots] = {};
-    int active = 0;
-    auto refill = [&](int k) {
+    auto next = [&](Walk& w) {
       while (r < e)
-        if (start(r++, lanes[k], box)) return true;
+        if (start(r++, w, box)) return true;
       return false;
     };
-#ifdef OCCSEG_FUSION_AVX2
-    if (avx2) {
-      for (int k = 0; k < kVectorLanes; ++k) active += busy[k] = refill(k);
-      if (active == kVectorLanes)
-        walk_vector_avx2(lanes, busy, marks, frame_.dims, box, hits, refill);
-      active = 0;  // the rest of the walks finish one by one below
-    }
-#endif
-    if (!avx2) {
-      for (int k = 0; k < kLanes; ++k) active += busy[k] = refill(k);
-      while (active == kLanes) {
-        for (int k = 0; k < kLanes; ++k)
-          if (!step(lanes[k], marks)) {
-            finish_walk(lanes[k], frame_.dims, box, hits);
-            if (!refill(k)) {
-              busy[k] = false;
-              --active;
-            }
-          }
-      }
-    }
-    for (int k = 0; k < kSlots; ++k)  // the last few walks, one by one
-      if (busy[k]) {
-        while (step(lanes[k], marks)) {
-        }
-        finish_walk(lanes[k], frame_.dims, box, hits);
-      }
+    kernel.walk_rays(kernels::NextRay(next), marks, frame_.dims, box, hits);
   };
   TouchBox box;
   std::vector<std::uint64_t> hits;  // end voxels holding a return, written after the walks

@@ -230,11 +230,11 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   st.begin("labelling");
   // The states go in: they are freed inside, before the segment statistics.
   detail::label_components(std::move(states), grid, r.labels, r.segments, params.threads,
-                           params.occupied_connectivity == 26, ws.run_starts);
+                           params.occupied_connectivity == 26, ws.run_starts, k);
   // Part of "labelling" for callers: it decides which connected regions are separate objects.
   if (params.preset == Preset::default_preset && params.support_plane > 0)
     split_support_planes(grid, r.labels, r.segments, static_cast<std::size_t>(params.support_plane),
-                         params.occupied_connectivity == 26, params.threads);
+                         params.occupied_connectivity == 26, params.threads, k);
   st.end();
   return r;
 }

@@ -1,16 +1,12 @@
+// Support planes (rules/planes.hpp): a segment's dominant plane by MSAC, and the split of the
+// objects standing on it.
 #include "rules/planes.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
 
 #include "occseg/parallel.hpp"
-#include "kernels/cpu_features.hpp"
-
-#if defined(__x86_64__) && defined(__GNUC__)
-#include <immintrin.h>
-#endif
 
 namespace occseg {
 
@@ -82,174 +78,42 @@ std::size_t count_inliers(const std::vector<Vec>& pts, const Plane& pl) {
 // prefer a slightly tilted plane that also grazes a few voxels of the layer above it.
 //
 // The terms are summed in four lanes (point i into lane i % 4, each lane in point order) and
-// the cost is (l0 + l1) + (l2 + l3): the same sum whether four points at a time are computed in
-// AVX2 or one at a time. The lanes stop growing once their sum reaches `stop` (terms are not
-// negative, so the cost could only grow further): such a plane loses to one that costs `stop`.
+// the cost is (l0 + l1) + (l2 + l3): the same sum whether a kernel computes four points at a time
+// or one (kernels::PlanesKernels::cost, which scores the search's sample, stopping once the sum
+// reaches a bound; this is the refits' cost over all points).
 constexpr double kCap = kPlaneInlierDistance * kPlaneInlierDistance;
-constexpr std::size_t kCostChunk = 256;  // points between two looks at `stop` (a multiple of 4)
 
 inline double cost_term(const Plane& pl, double x, double y, double z) {
   const double e = pl.distance(x, y, z);
   return std::min(e * e, kCap);
 }
 
-double cost(const std::vector<Vec>& pts, const Plane& pl,
-            double stop = std::numeric_limits<double>::infinity()) {
+double cost(const std::vector<Vec>& pts, const Plane& pl) {
   double l[4] = {0, 0, 0, 0};
-  for (std::size_t b = 0; b < pts.size(); b += kCostChunk) {
-    for (std::size_t i = b; i < std::min(pts.size(), b + kCostChunk); ++i)
-      l[i % 4] += cost_term(pl, pts[i][0], pts[i][1], pts[i][2]);
-    if ((l[0] + l[1]) + (l[2] + l[3]) >= stop) break;
-  }
+  for (std::size_t i = 0; i < pts.size(); ++i) l[i % 4] += cost_term(pl, pts[i][0], pts[i][1], pts[i][2]);
   return (l[0] + l[1]) + (l[2] + l[3]);
 }
 
-// The MSAC sample by coordinate, for cost_avx2().
+// The plane search's sample by coordinate, for the cost kernels' vector loads.
 struct Coords {
   std::vector<double> x, y, z;
   explicit Coords(const std::vector<Vec>& pts) {
     for (const Vec& p : pts) x.push_back(p[0]), y.push_back(p[1]), z.push_back(p[2]);
   }
+  kernels::PlanePoints points() const { return {x.data(), y.data(), z.data(), x.size()}; }
 };
 
-#if defined(__x86_64__) && defined(__GNUC__)
-// The terms of points i .. i + 3 of plane `pl` (n0, n1, n2, d: its coefficients in every lane).
-__attribute__((target("avx2"))) inline __m256d terms4(const Coords& c, std::size_t i, __m256d n0, __m256d n1,
-                                                      __m256d n2, __m256d d) {
-  const __m256d cap = _mm256_set1_pd(kCap);
-  __m256d t = _mm256_add_pd(_mm256_mul_pd(n0, _mm256_loadu_pd(c.x.data() + i)),
-                            _mm256_mul_pd(n1, _mm256_loadu_pd(c.y.data() + i)));
-  t = _mm256_sub_pd(_mm256_add_pd(t, _mm256_mul_pd(n2, _mm256_loadu_pd(c.z.data() + i))), d);
-  // std::min(e * e, cap) is cap < e * e ? cap : e * e; minpd(a, b) is a < b ? a : b
-  return _mm256_min_pd(_mm256_mul_pd(t, t), cap);
-}
+kernels::MsacPlane msac(const Plane& pl) { return {pl.n[0], pl.n[1], pl.n[2], pl.d}; }
 
-__attribute__((target("avx2"))) inline double lane_sum(__m256d acc) {
-  double l[4];
-  _mm256_storeu_pd(l, acc);
-  return (l[0] + l[1]) + (l[2] + l[3]);
-}
-
-// cost() four points at a time: the same operations in the same order per point (no FMA, which
-// would round differently), lane j of the vector is lane j of cost(). MSAC scores up to 256
-// planes on 4096 points: 1 ns per point in scalar code. Goes on from point i (a multiple of
-// kCostChunk, or n & ~3) with the lanes' sums so far in `acc`.
-__attribute__((target("avx2"))) double cost_avx2_from(const Coords& c, const Plane& pl, double stop, __m256d acc,
-                                                      std::size_t i) {
-  const __m256d n0 = _mm256_set1_pd(pl.n[0]), n1 = _mm256_set1_pd(pl.n[1]), n2 = _mm256_set1_pd(pl.n[2]);
-  const __m256d d = _mm256_set1_pd(pl.d);
-  const std::size_t n = c.x.size(), n4 = n & ~std::size_t(3);
-  while (i < n4) {
-    for (const std::size_t e = std::min(n4, i + kCostChunk); i < e; i += 4)
-      acc = _mm256_add_pd(acc, terms4(c, i, n0, n1, n2, d));
-    if (lane_sum(acc) >= stop) return lane_sum(acc);
-  }
-  double l[4];
-  _mm256_storeu_pd(l, acc);
-  for (; i < n; ++i) l[i % 4] += cost_term(pl, c.x[i], c.y[i], c.z[i]);
-  return (l[0] + l[1]) + (l[2] + l[3]);
-}
-
-__attribute__((target("avx2"))) double cost_avx2(const Coords& c, const Plane& pl, double stop) {
-  return cost_avx2_from(c, pl, stop, _mm256_setzero_pd(), 0);
-}
-
-// cost_avx2() of two planes in one pass over the points, each exactly as alone: a plane's sums
-// are one chain of additions (4 cycles per 4 points), so two chains side by side score twice the
-// planes in the same time. A plane that reaches `stop` drops out, the other goes on alone.
-__attribute__((target("avx2"))) void cost_pair_avx2(const Coords& c, const Plane& a, const Plane& b, double stop,
-                                                    double& cost_a, double& cost_b) {
-  const __m256d a0 = _mm256_set1_pd(a.n[0]), a1 = _mm256_set1_pd(a.n[1]), a2 = _mm256_set1_pd(a.n[2]);
-  const __m256d b0 = _mm256_set1_pd(b.n[0]), b1 = _mm256_set1_pd(b.n[1]), b2 = _mm256_set1_pd(b.n[2]);
-  const __m256d ad = _mm256_set1_pd(a.d), bd = _mm256_set1_pd(b.d);
-  const std::size_t n4 = c.x.size() & ~std::size_t(3);
-  __m256d acc_a = _mm256_setzero_pd(), acc_b = _mm256_setzero_pd();
-  std::size_t i = 0;
-  while (i < n4) {
-    for (const std::size_t e = std::min(n4, i + kCostChunk); i < e; i += 4) {
-      acc_a = _mm256_add_pd(acc_a, terms4(c, i, a0, a1, a2, ad));
-      acc_b = _mm256_add_pd(acc_b, terms4(c, i, b0, b1, b2, bd));
-    }
-    const bool out_a = lane_sum(acc_a) >= stop, out_b = lane_sum(acc_b) >= stop;
-    if (out_a || out_b) {
-      cost_a = out_a ? lane_sum(acc_a) : cost_avx2_from(c, a, stop, acc_a, i);
-      cost_b = out_b ? lane_sum(acc_b) : cost_avx2_from(c, b, stop, acc_b, i);
-      return;
-    }
-  }
-  cost_a = cost_avx2_from(c, a, stop, acc_a, i);  // (the last n % 4 points)
-  cost_b = cost_avx2_from(c, b, stop, acc_b, i);
-}
-#endif
-
-std::atomic<bool> g_vector_planes{true};
-
-// Which of the labels row[x0 .. x1) equal s: bit k % 64 of bits[k / 64] for row[x0 + k] (the
-// words past the row's last one untouched). Returns how many. The searches of the split walk the
-// boxes of their segments this way: a branch per voxel cost up to 0.65 ms per segment on the
-// scene (194,184 voxels in the box of a segment of 6,275).
-std::size_t row_members_portable(const std::uint32_t* row, std::size_t x0, std::size_t x1, std::uint32_t s,
-                                 std::uint64_t* bits) {
-  std::size_t count = 0;
-  for (std::size_t k = 0; x0 + k < x1; k += 64) {
-    std::uint64_t w = 0;
-    for (std::size_t j = 0; j < 64 && x0 + k + j < x1; ++j)
-      w |= static_cast<std::uint64_t>(row[x0 + k + j] == s) << j;
-    bits[k / 64] = w;
-    count += static_cast<std::size_t>(__builtin_popcountll(w));
-  }
-  return count;
-}
-
-#if defined(__x86_64__) && defined(__GNUC__)
-__attribute__((target("avx2,popcnt"))) std::size_t row_members_avx2(const std::uint32_t* row, std::size_t x0,
-                                                                     std::size_t x1, std::uint32_t s,
-                                                                     std::uint64_t* bits) {
-  const __m256i v = _mm256_set1_epi32(static_cast<int>(s));
-  std::size_t count = 0;
-  for (std::size_t k = 0; x0 + k < x1; k += 64) {
-    std::uint64_t w = 0;
-    std::size_t j = 0;
-    for (; j < 64 && x0 + k + j + 8 <= x1; j += 8) {
-      const __m256i l = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(row + x0 + k + j));
-      const auto m = static_cast<unsigned>(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(l, v))));
-      w |= static_cast<std::uint64_t>(m) << j;
-    }
-    for (; j < 64 && x0 + k + j < x1; ++j) w |= static_cast<std::uint64_t>(row[x0 + k + j] == s) << j;
-    bits[k / 64] = w;
-    count += static_cast<std::size_t>(__builtin_popcountll(w));
-  }
-  return count;
-}
-#endif
-
-std::size_t row_members(const std::uint32_t* row, std::size_t x0, std::size_t x1, std::uint32_t s,
-                        std::uint64_t* bits) {
-#if defined(__x86_64__) && defined(__GNUC__)
-  if (cpu_has_avx2() && g_vector_planes.load(std::memory_order_relaxed))
-    return row_members_avx2(row, x0, x1, s, bits);
-#endif
-  return row_members_portable(row, x0, x1, s, bits);
-}
-
-// cost() of the sample in `c` (the same points as `pts`).
-double sample_cost(const std::vector<Vec>& pts, const Coords& c, const Plane& pl, double stop) {
-#if defined(__x86_64__) && defined(__GNUC__)
-  if (cpu_has_avx2() && g_vector_planes.load(std::memory_order_relaxed)) return cost_avx2(c, pl, stop);
-#endif
-  (void)c;
-  return cost(pts, pl, stop);
+// The cost of `pl` on the sample in `c`, cut short from `stop` on.
+double sample_cost(const kernels::PlanesKernels& k, const Coords& c, const Plane& pl, double stop) {
+  return k.cost(c.points(), msac(pl), kCap, stop);
 }
 
 // sample_cost() of two planes.
-void sample_cost_pair(const std::vector<Vec>& pts, const Coords& c, const Plane& a, const Plane& b, double stop,
+void sample_cost_pair(const kernels::PlanesKernels& k, const Coords& c, const Plane& a, const Plane& b, double stop,
                       double& cost_a, double& cost_b) {
-#if defined(__x86_64__) && defined(__GNUC__)
-  if (cpu_has_avx2() && g_vector_planes.load(std::memory_order_relaxed))
-    return cost_pair_avx2(c, a, b, stop, cost_a, cost_b);
-#endif
-  cost_a = sample_cost(pts, c, a, stop);
-  cost_b = sample_cost(pts, c, b, stop);
+  k.cost_pair(c.points(), msac(a), msac(b), kCap, stop, cost_a, cost_b);
 }
 
 // Least-squares plane through the points within kPlaneInlierDistance of `pl`; false if degenerate.
@@ -300,7 +164,8 @@ void for_sample(std::size_t n, F&& f) {
 // `threads`; the batch's scores are then taken in draw order exactly as one at a time would, so
 // the result never depends on the thread count. A batch past the adaptive stop is wasted work,
 // not a different result.
-bool sample_plane(const std::vector<Vec>& sample, std::uint64_t seed, Plane& best, int threads = 1) {
+bool sample_plane(const std::vector<Vec>& sample, std::uint64_t seed, Plane& best, int threads,
+                  const kernels::PlanesKernels& k) {
   if (sample.size() < 3) return false;
   Rng rng{seed};
   // At most 256 draws of 3 points: a plane holding half the points is drawn with probability
@@ -339,16 +204,16 @@ bool sample_plane(const std::vector<Vec>& sample, std::uint64_t seed, Plane& bes
     const double stop = best_cost;  // scores from `stop` up cannot win: cut short
     const auto score = [&](std::size_t b, std::size_t e) {
       Draw* pending = nullptr;  // a valid draw waiting for a second
-      for (std::size_t k = b; k < e; ++k) {
-        if (!draws[k].valid) continue;
+      for (std::size_t d = b; d < e; ++d) {
+        if (!draws[d].valid) continue;
         if (!pending) {
-          pending = &draws[k];
+          pending = &draws[d];
           continue;
         }
-        sample_cost_pair(sample, coords, pending->h, draws[k].h, stop, pending->score, draws[k].score);
+        sample_cost_pair(k, coords, pending->h, draws[d].h, stop, pending->score, draws[d].score);
         pending = nullptr;
       }
-      if (pending) pending->score = sample_cost(sample, coords, pending->h, stop);
+      if (pending) pending->score = sample_cost(k, coords, pending->h, stop);
     };
     if (parallel)
       parallel_for(static_cast<std::size_t>(end - it), threads,
@@ -382,23 +247,21 @@ std::size_t refine_plane(const std::vector<Vec>& points, Plane& best) {
 
 }  // namespace
 
-void detail::set_vector_planes(bool enabled) { g_vector_planes.store(enabled, std::memory_order_relaxed); }
-
-double detail::msac_cost(const std::vector<Vec>& points, const Plane& plane) {
-  return sample_cost(points, Coords(points), plane, std::numeric_limits<double>::infinity());
+double detail::msac_cost(const std::vector<Vec>& points, const Plane& plane, const kernels::Table& k) {
+  return sample_cost(k.planes, Coords(points), plane, std::numeric_limits<double>::infinity());
 }
 
 void detail::msac_cost_pair(const std::vector<Vec>& points, const Plane& a, const Plane& b, double stop, double& cost_a,
-                            double& cost_b) {
-  sample_cost_pair(points, Coords(points), a, b, stop, cost_a, cost_b);
+                            double& cost_b, const kernels::Table& k) {
+  sample_cost_pair(k.planes, Coords(points), a, b, stop, cost_a, cost_b);
 }
 
 bool fit_dominant_plane(const std::vector<Vec>& points, std::uint64_t seed, Plane& plane, std::size_t& inliers,
-                        int threads) {
+                        int threads, const kernels::Table& k) {
   inliers = 0;
   std::vector<Vec> sample;
   for_sample(points.size(), [&](std::size_t i) { sample.push_back(points[i]); });
-  if (!sample_plane(sample, seed, plane, threads)) return false;
+  if (!sample_plane(sample, seed, plane, threads, k.planes)) return false;
   inliers = refine_plane(points, plane);
   return true;
 }
@@ -408,8 +271,9 @@ namespace {
 // One pass of the split over segment `s`; state shared between its steps.
 class Splitter {
  public:
-  Splitter(const Grid& g, LabelArray& labels, std::vector<Segment>& segments, bool occupied26)
-      : g_(g), d_(g.dims), labels_(labels), segs_(segments), conn26_(occupied26) {
+  Splitter(const Grid& g, LabelArray& labels, std::vector<Segment>& segments, bool occupied26,
+           const kernels::PlanesKernels& k)
+      : g_(g), d_(g.dims), labels_(labels), segs_(segments), conn26_(occupied26), k_(k) {
     const auto sy = static_cast<std::ptrdiff_t>(d_.nx), sz = static_cast<std::ptrdiff_t>(d_.nx * d_.ny);
     for (int dz = -1; dz <= 1; ++dz)
       for (int dy = -1; dy <= 1; ++dy)
@@ -427,7 +291,7 @@ class Splitter {
   // region) before its voxels are even listed; then the refits over all of s's voxels and the
   // side free space is seen from. It reads the labels and the segment table only, into buffers of
   // its own, so several segments may be searched at once while none is being split (the refits
-  // and the sides were 0.74 of the serial splits' 1 ms on the scene).
+  // and the sides are most of a serial split's work).
   struct Found {
     bool split = false;  // a plane to split at: refined, holding half of s, seen from one side
     Plane pl;
@@ -444,7 +308,8 @@ class Splitter {
     collect_sample(s, first, ranks, first_voxel, pts);
     Found f;
     Plane pl;
-    if (!sample_plane(pts, 0x6F6363736567ull ^ (std::uint64_t(first_voxel) * 0x9E3779B97F4A7C15ull), pl, threads) ||
+    if (!sample_plane(pts, 0x6F6363736567ull ^ (std::uint64_t(first_voxel) * 0x9E3779B97F4A7C15ull), pl, threads,
+                      k_) ||
         10 * count_inliers(pts, pl) < 4 * pts.size())  // under 40 %: far from half
       return f;
     std::vector<std::uint32_t> members;
@@ -499,8 +364,9 @@ class Splitter {
   }
 
   // The coordinates of the voxels of s with the given ranks (ascending) in scan order, into pts.
-  // Without a bucket, rows are counted with a vectorised compare and only the few rows that hold
-  // a sampled rank are walked voxel by voxel (a branch per voxel cost 40 ms on a noisy map).
+  // Without a bucket, rows are counted with the row_members kernel and only the few rows that
+  // hold a sampled rank are walked voxel by voxel (a branch per voxel of the sprawling boxes of a
+  // noisy map is slow).
   void collect_sample(std::uint32_t s, const std::uint32_t* first, const std::vector<std::size_t>& ranks,
                       std::uint32_t& first_voxel, std::vector<Vec>& pts) const {
     if (first) {
@@ -515,7 +381,7 @@ class Splitter {
     for (std::size_t z = seg.bbox_min[2]; z <= seg.bbox_max[2] && next < ranks.size(); ++z)
       for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1] && next < ranks.size(); ++y) {
         const std::size_t row = g_.index(0, y, z);
-        const std::size_t c = row_members(labels_.data() + row, x0, x1, s, bits.data());
+        const std::size_t c = k_.row_members(labels_.data() + row, x0, x1, s, bits.data());
         if (rank + c <= ranks[next]) {  // (never the first row with a voxel of s: ranks[0] is 0)
           rank += c;
           continue;
@@ -544,7 +410,7 @@ class Splitter {
     for (std::size_t z = seg.bbox_min[2]; z <= seg.bbox_max[2]; ++z)
       for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1]; ++y) {
         const std::size_t row = g_.index(0, y, z);
-        if (!row_members(labels_.data() + row, x0, x1, s, bits.data())) continue;
+        if (!k_.row_members(labels_.data() + row, x0, x1, s, bits.data())) continue;
         for (std::size_t k = 0; k < bits.size(); ++k)
           for (std::uint64_t w = bits[k]; w; w &= w - 1) {
             const std::size_t x = x0 + 64 * k + static_cast<std::size_t>(__builtin_ctzll(w));
@@ -602,8 +468,8 @@ class Splitter {
 
   // Calls f(neighbour index) for the 6 or 26 neighbours of voxel i inside the grid, in the order
   // of their offsets (z, then y, then x, each from -1 to +1). A voxel off the grid's faces takes
-  // the precomputed offsets without a test per neighbour (the floods of the split spent 90 ns
-  // per voxel on those tests and the coordinates).
+  // the precomputed offsets without a test per neighbour (those tests and the coordinates would
+  // be most of a flood's work).
   template <class F>
   void for_neighbours(std::size_t i, F&& f) const {
     const std::size_t x = i % d_.nx, y = (i / d_.nx) % d_.ny, z = i / (d_.nx * d_.ny);
@@ -644,8 +510,7 @@ class Splitter {
 
   // Connected pieces of the plane's inliers and of the rest, each labelled temp(k). The inliers
   // are relabelled kKeep first (free until relabel()), the rest stay s, so the floods compare
-  // labels only: testing each neighbour's side of the plane cost 0.8 ms on one 7168-voxel
-  // segment, serially.
+  // labels only, not each neighbour's side of the plane.
   void make_pieces(std::uint32_t s) {
     pieces_.clear();
     for (std::size_t m = 0; m < members_.size(); ++m)
@@ -753,6 +618,7 @@ class Splitter {
   LabelArray& labels_;
   std::vector<Segment>& segs_;
   const bool conn26_;
+  const kernels::PlanesKernels& k_;
   std::ptrdiff_t offsets_[26];  // of the neighbours, in for_neighbours' order
   std::size_t neighbours_ = 0;  // 6 or 26
   Plane plane_;
@@ -764,7 +630,7 @@ class Splitter {
 }  // namespace
 
 void split_support_planes(const Grid& grid, LabelArray& labels, std::vector<Segment>& segments,
-                          std::size_t min_plane, bool occupied26, int threads) {
+                          std::size_t min_plane, bool occupied26, int threads, const kernels::Table& k) {
   if (min_plane == 0) return;
   // Candidates: occupied segments big enough for a plane and an object. Their voxels are found by
   // scanning each one's box, or, when the boxes add up to more than the map (sprawling segments
@@ -784,7 +650,7 @@ void split_support_planes(const Grid& grid, LabelArray& labels, std::vector<Segm
     boxes += box;
     voxels += seg.voxels;
   }
-  Splitter splitter(grid, labels, segments, occupied26);
+  Splitter splitter(grid, labels, segments, occupied26, k.planes);
   std::vector<std::uint32_t> members;  // bucketed voxels of the candidates, candidate by candidate
   std::vector<std::size_t> start{0};
   if (boxes > labels.size()) {

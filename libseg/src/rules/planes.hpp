@@ -7,8 +7,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "stages/label.hpp"
+#include "kernels/kernels.hpp"
 #include "occseg/grid.hpp"
+#include "stages/label.hpp"
 
 namespace occseg {
 
@@ -35,10 +36,10 @@ struct Plane {
 // capped at kPlaneInlierDistance) over at most 4096 of them (the generator is seeded with `seed`),
 // refined by least-squares fits to the inliers. `inliers` receives how many of all points are
 // within kPlaneInlierDistance of the result. Returns false for fewer than 3 points or when all
-// are collinear. Candidate planes are scored on up to `threads` threads (0: all cores); the result
-// never depends on the thread count.
+// are collinear. Candidate planes are scored on up to `threads` threads (0: all cores) with the
+// kernels `k`; the result never depends on the thread count or the kernels.
 bool fit_dominant_plane(const std::vector<std::array<double, 3>>& points, std::uint64_t seed, Plane& plane,
-                        std::size_t& inliers, int threads = 1);
+                        std::size_t& inliers, int threads = 1, const kernels::Table& k = kernels::active());
 
 // Splits every occupied segment with at least `min_plane` voxels whose dominant plane holds at
 // least `min_plane` of them and at least half of them. Pieces of the rest (connected as
@@ -53,23 +54,21 @@ bool fit_dominant_plane(const std::vector<std::array<double, 3>>& points, std::u
 // segments are recomputed. The plane searches run first, several segments at once on up to
 // `threads` threads (0: all cores; or one segment's candidate planes over them when it is the
 // only one), then the splits one segment after the other; results never depend on the thread
-// count.
+// count or the kernels `k`.
 void split_support_planes(const Grid& grid, LabelArray& labels, std::vector<Segment>& segments,
-                          std::size_t min_plane, bool occupied26, int threads = 1);
+                          std::size_t min_plane, bool occupied26, int threads = 1,
+                          const kernels::Table& k = kernels::active());
 
 namespace detail {
-// For tests and benchmarks: false scores candidate planes and lists the voxels of a segment's box
-// with the scalar code even where the processor has AVX2 (both give identical results).
-// Process-wide.
-void set_vector_planes(bool enabled);
-// The MSAC cost of `plane` on `points` as the plane search computes it: the squared distances,
-// capped at kPlaneInlierDistance^2, point i's added to lane i % 4 in point order, the cost
-// (l0 + l1) + (l2 + l3). For tests.
-double msac_cost(const std::vector<std::array<double, 3>>& points, const Plane& plane);
+// The MSAC cost of `plane` on `points` as the plane search computes it with the kernels `k`: the
+// squared distances, capped at kPlaneInlierDistance^2, point i's added to lane i % 4 in point
+// order, the cost (l0 + l1) + (l2 + l3). For tests.
+double msac_cost(const std::vector<std::array<double, 3>>& points, const Plane& plane,
+                 const kernels::Table& k = kernels::active());
 // msac_cost() of two planes as the search scores them, side by side: each must be msac_cost()'s
 // bit for bit, or, once its sum reaches `stop`, some sum at or above `stop`. For tests.
 void msac_cost_pair(const std::vector<std::array<double, 3>>& points, const Plane& a, const Plane& b, double stop,
-                    double& cost_a, double& cost_b);
+                    double& cost_a, double& cost_b, const kernels::Table& k = kernels::active());
 }  // namespace detail
 
 }  // namespace occseg

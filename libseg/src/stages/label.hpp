@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "kernels/kernels.hpp"
 #include "occseg/grid.hpp"
 #include "occseg/params.hpp"
 #include "occseg/result.hpp"
@@ -22,24 +23,26 @@ constexpr std::size_t kLabelSlab = 8;
 // voxel (x fastest), and fills `segments` (index = id). Regions are 6-connected; with
 // `occupied26`, occupied voxels also join across edges and corners (26-connectivity). Throws
 // Error(unsupported) beyond 2^32-1 voxels, since labels are uint32. `threads` as in Params
-// (0: all cores); results never depend on it.
+// (0: all cores); results never depend on it, nor on the kernels `k` (every level gives the same
+// labels and segments, bit for bit).
 void label_components(const std::vector<std::uint8_t>& states, const Grid& grid,
                       LabelArray& labels, std::vector<Segment>& segments, int threads = 0,
-                      bool occupied26 = false);
+                      bool occupied26 = false, const kernels::Table& k = kernels::active());
 // The same, taking the states over: they are freed (left empty) as soon as the components are
 // known, before the statistics pass (which finds its runs in 1/8 byte per voxel of bits).
 void label_components(std::vector<std::uint8_t>&& states, const Grid& grid, LabelArray& labels,
-                      std::vector<Segment>& segments, int threads = 0, bool occupied26 = false);
+                      std::vector<Segment>& segments, int threads = 0, bool occupied26 = false,
+                      const kernels::Table& k = kernels::active());
 void label_components(UninitVector<std::uint8_t>&& states, const Grid& grid, LabelArray& labels,
-                      std::vector<Segment>& segments, int threads = 0, bool occupied26 = false);
+                      std::vector<Segment>& segments, int threads = 0, bool occupied26 = false,
+                      const kernels::Table& k = kernels::active());
 
 namespace detail {
 // The last overload with the run-start bits (1/8 byte per voxel) kept in `run_starts`, whose
-// storage a context hands from call to call: fresh, its 1.6 MB on a 320 x 320 x 128 map cost
-// 0.6 ms of page faults per call.
+// storage a context hands from call to call: fresh storage would be paged in on every call.
 void label_components(UninitVector<std::uint8_t>&& states, const Grid& grid, LabelArray& labels,
                       std::vector<Segment>& segments, int threads, bool occupied26,
-                      std::vector<std::uint8_t>& run_starts);
+                      std::vector<std::uint8_t>& run_starts, const kernels::Table& k);
 }  // namespace detail
 
 }  // namespace occseg
