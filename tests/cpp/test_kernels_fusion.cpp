@@ -38,17 +38,17 @@ std::uint64_t voxel_after(Walk w, long steps) {
   return w.i;
 }
 
-struct Block {
+struct RayBlock {
   Dims dims;
   std::vector<Walk> walks;
 };
 
 // `count` random walks in a grid of `dims`.
-Block random_block(const Dims& dims, std::size_t count, test::Rng& r) {
+RayBlock random_block(const Dims& dims, std::size_t count, test::Rng& r) {
   const double sub = std::numeric_limits<double>::denorm_min();
   const double firsts[] = {-0.0, 0.0, sub, 0.5, 1.0, 0.25, 0.75};
   const double deltas[] = {0.5, 1.0, 0.25, 2.0, sub, 1e300};
-  Block b{dims, {}};
+  RayBlock b{dims, {}};
   const long n[3] = {long(dims.nx), long(dims.ny), long(dims.nz)};
   for (std::size_t k = 0; k < count; ++k) {
     Walk w{};
@@ -90,7 +90,7 @@ struct Outcome {
   std::vector<std::uint64_t> hits;
 };
 
-Outcome walk(const kernels::FusionKernels& k, const Block& b) {
+Outcome walk(const kernels::FusionKernels& k, const RayBlock& b) {
   Outcome o;
   o.marks.assign(b.dims.count(), 0);
   std::size_t next = 0;
@@ -115,7 +115,7 @@ TEST_P(KernelsFusion, WalkRaysMatchesScalar) {
   std::size_t marked = 0, hits = 0;
   for (const Dims& d : {Dims{1, 1, 1}, Dims{13, 11, 7}, Dims{40, 3, 2}, Dims{2, 2, 64}})
     for (std::size_t count : {0, 1, 2, 3, 4, 5, 7, 8, 9, 50, 333}) {
-      const Block b = random_block(d, count, r);
+      const RayBlock b = random_block(d, count, r);
       const Outcome want = walk(kernels::table(Isa::scalar).fusion, b);
       const Outcome got = walk(kernels::active().fusion, b);
       ASSERT_EQ(got.marks, want.marks) << count << " walks in " << d.nx << " x " << d.ny << " x " << d.nz;

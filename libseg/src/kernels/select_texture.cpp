@@ -7,6 +7,7 @@ namespace occseg::kernels {
 
 void select_texture(TextureKernels& k, Isa cap) {
   // scalar and sse2: the compiler's code for the baseline (no SSE2 kernel of its own)
+  k.values_in_range = scalar::values_in_range;
   k.contrast_row = scalar::contrast_row;
   k.checks_values = false;
   k.contrast_row_any = scalar::contrast_row_any;
@@ -19,6 +20,7 @@ void select_texture(TextureKernels& k, Isa cap) {
   k.combine_row = scalar::combine_row;
 #if defined(__x86_64__) && defined(__GNUC__)
   if (cap >= Isa::avx2 && cpu_has_avx2()) {
+    k.values_in_range = avx2::values_in_range;
     k.contrast_row = avx2::contrast_row;
     k.checks_values = true;
     k.any_recheck = avx2::any_recheck;

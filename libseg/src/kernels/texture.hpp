@@ -24,6 +24,10 @@ constexpr std::size_t kStepStride = ContrastQuantizer::kFine + 1;
 // Neighbour (x-1, x+1, y-1, y+1, z-1, z+1); `present` masks the neighbours that exist (bit i for
 // neighbour i; an absent one has offset 0). `p` points at the first voxel of the run.
 struct TextureKernels {
+  // ---- the map's values ----
+  // True when every p[0, n) lies in [0, 1] (NaN excluded).
+  bool (*values_in_range)(const float* p, std::size_t n) = nullptr;
+
   // ---- pass 1: parked steps, LBP codes, the distribution of the contrasts ----
   // The parked steps of n consecutive voxels with all six neighbours (or kRecheckStep where the
   // float arithmetic cannot certify one), into steps[0, n), and their LBP codes into lbp[0, n)

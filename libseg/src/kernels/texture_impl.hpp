@@ -6,6 +6,7 @@
 namespace occseg::kernels {
 
 namespace scalar {
+bool values_in_range(const float* p, std::size_t n);
 bool contrast_row(const float* p, const std::ptrdiff_t* off, std::size_t n, code_t* steps, std::uint8_t* lbp,
                   bool& maybe_recheck);
 void contrast_row_any(const float* p, const std::ptrdiff_t* off, std::size_t n, unsigned present, code_t* steps,
@@ -23,6 +24,7 @@ void combine_row(const std::uint8_t* lbp, const std::uint16_t* lvl, std::size_t 
 
 #if defined(__x86_64__) && defined(__GNUC__)
 namespace avx2 {
+bool values_in_range(const float* p, std::size_t n);
 bool contrast_row(const float* p, const std::ptrdiff_t* off, std::size_t n, code_t* steps, std::uint8_t* lbp,
                   bool& maybe_recheck);
 bool any_recheck(const code_t* steps, std::size_t n);

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "occseg/error.hpp"
+#include "kernels/kernels.hpp"
 
 namespace occseg {
 
@@ -24,13 +25,7 @@ Grid::Grid(Dims d, float fill, double vs) : dims(d), voxel_size(vs) {
   p.assign(d.count(), fill);
 }
 
-// Branch-free so that it vectorises; counts instead of stopping at the first bad value.
-__attribute__((target_clones("avx2", "default")))
-bool probabilities_in_range(const float* p, std::size_t n) {
-  std::size_t bad = 0;
-  for (std::size_t i = 0; i < n; ++i) bad += !((p[i] >= 0.0f) & (p[i] <= 1.0f));
-  return bad == 0;
-}
+bool probabilities_in_range(const float* p, std::size_t n) { return kernels::active().texture.values_in_range(p, n); }
 
 void check_probabilities(const Grid& g) {
   check_dims(g.dims);

@@ -79,7 +79,7 @@ void release_freed_memory() {
 // scalar check runs only to name the first problem. values = false leaves the values to the
 // texture stage (the built-in operator tests each row while it reads it: one pass over the map
 // fewer).
-void check_map(const Grid& grid, int threads, bool values) {
+void check_map(const Grid& grid, int threads, bool values, const kernels::Table& k) {
   check_dims(grid.dims);
   bool ok = grid.p.size() == grid.dims.count() && grid.voxel_size > 0 && std::isfinite(grid.voxel_size);
   if (ok && values) {
@@ -88,7 +88,7 @@ void check_map(const Grid& grid, int threads, bool values) {
     std::vector<std::uint8_t> good(chunks, 0);
     parallel_for(chunks, threads, [&](std::size_t c0, std::size_t c1) {
       for (std::size_t c = c0; c < c1; ++c)
-        good[c] = probabilities_in_range(grid.p.data() + c * chunk, std::min(chunk, n - c * chunk));
+        good[c] = k.texture.values_in_range(grid.p.data() + c * chunk, std::min(chunk, n - c * chunk));
     });
     for (auto g : good) ok = ok && g;
   }
@@ -120,7 +120,7 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   // The built-in texture operator checks the values itself (compute_texture); plugins get a
   // checked map.
   const TextureOperator* op = find_texture(params.texture);
-  check_map(grid, params.threads, !(op && op->native));
+  check_map(grid, params.threads, !(op && op->native), k);
   Result r;
   r.dims = grid.dims;
   // A recycled array large enough is kept (resize_huge below); a smaller one would only be copied

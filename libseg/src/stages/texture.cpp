@@ -132,7 +132,7 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
   std::atomic<bool> bad_values{false};
   const bool by_rows = full && tk.checks_values;
   const std::size_t plane = nx * ny;
-  auto plane_ok = [&](std::size_t z) { return by_rows || probabilities_in_range(p + plane * z, plane); };
+  auto plane_ok = [&](std::size_t z) { return by_rows || tk.values_in_range(p + plane * z, plane); };
   std::atomic<std::size_t> next_group{0};
   // Planes [z0, z1) into the histograms h; false when a value outside [0, 1] was seen. A function
   // of its own: GCC compiled it slower inlined into the loop over groups below.
@@ -149,13 +149,13 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
         std::size_t x0 = 0, x1 = 0;
         if (!interior_row(d, y, z, x0, x1)) {
           std::fill(row, row + nx, kNoTexture);
-          ok = !by_rows || probabilities_in_range(prow, nx);
+          ok = !by_rows || tk.values_in_range(prow, nx);
           if (rows) rows->row(rows->self, y, z);
           continue;
         }
         std::fill(row, row + x0, kNoTexture);
         std::fill(row + x1, row + nx, kNoTexture);
-        ok = !by_rows || (probabilities_in_range(prow, x0) && probabilities_in_range(prow + x1, nx - x1));
+        ok = !by_rows || (tk.values_in_range(prow, x0) && tk.values_in_range(prow + x1, nx - x1));
         const float* prow0 = prow + x0;
         const std::size_t n = x1 - x0;
         // With scratch, the LBP codes now, from the contrast kernel's own comparisons: pass 2
@@ -240,23 +240,6 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
         tk.combine_row(lbp.data(), lvl.data(), n, bins, row);
       }
   });
-}
-
-// TEMPORARY (issue 22 merge): removed once every stage has its table slots.
-namespace {
-std::atomic<int> g_texture_kernel{static_cast<int>(detail::TextureKernel::fastest)};
-}  // namespace
-void detail::set_texture_kernel(TextureKernel k) { g_texture_kernel.store(static_cast<int>(k), std::memory_order_relaxed); }
-detail::TextureKernel detail::texture_kernel() {
-  int level = static_cast<int>(TextureKernel::compiler);
-  switch (kernels::active().isa) {
-    case kernels::Isa::scalar:
-    case kernels::Isa::sse2: level = static_cast<int>(TextureKernel::compiler); break;
-    case kernels::Isa::avx2: level = static_cast<int>(TextureKernel::avx2); break;
-    case kernels::Isa::avx512: level = static_cast<int>(TextureKernel::avx512); break;
-    case kernels::Isa::avx512vbmi: level = static_cast<int>(TextureKernel::avx512vbmi); break;
-  }
-  return static_cast<TextureKernel>(std::min(level, g_texture_kernel.load(std::memory_order_relaxed)));
 }
 
 }  // namespace occseg

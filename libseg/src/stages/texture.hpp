@@ -31,14 +31,4 @@ TextureUnit texture_unit(double centre, const double neighbours[6], unsigned pre
 TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads,
                            const kernels::Table& k = kernels::active());
 
-// TEMPORARY (issue 22 merge): removed once every stage has its table slots. The process-wide
-// switch the stages not yet ported read: texture_kernel() is the lower of the setting and the
-// level of the calling thread's kernels (kernels::active()); the texture and the creation do not
-// read it.
-namespace detail {
-enum class TextureKernel { compiler = 0, avx2 = 1, avx512 = 2, avx512vbmi = 3, fastest = 3 };
-void set_texture_kernel(TextureKernel k);
-TextureKernel texture_kernel();
-}  // namespace detail
-
 }  // namespace occseg

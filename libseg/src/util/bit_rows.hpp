@@ -9,10 +9,6 @@
 #include <cstdint>
 
 #include "util/aliasing.hpp"
-// TEMPORARY (issue 22 merge): removed once every stage has its table slots (the stages not yet
-// ported use the vector forms through this header).
-#include "kernels/avx2/bit_rows.hpp"
-#include "kernels/sse2/bit_rows.hpp"
 
 namespace occseg::detail {
 

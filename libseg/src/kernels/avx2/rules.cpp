@@ -6,6 +6,8 @@
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
 
+#include "kernels/avx2/bit_rows.hpp"
+
 namespace occseg::kernels::avx2 {
 
 namespace {

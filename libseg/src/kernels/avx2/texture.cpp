@@ -6,9 +6,12 @@
 #include "kernels/generic/texture_loops.hpp"
 #include "kernels/avx2/lane_pack.hpp"
 #include "kernels/texture_impl.hpp"
-#include "occseg/grid.hpp"
 
 namespace occseg::kernels::avx2 {
+
+__attribute__((target("avx2"))) bool values_in_range(const float* p, std::size_t n) {
+  return generic::values_in_range(p, n);
+}
 
 // generic::contrast_row<63>'s steps, 8 voxels per step. The float contrast is computed
 // differently (the six masked neighbours summed as a tree of pairs, each mean as
@@ -36,7 +39,7 @@ __attribute__((target("avx2"))) bool contrast_row(const float* p, const std::ptr
     generic::contrast_row<63, true>(p, off, n, out);
     if (lbp) generic::lbp_row<63>(p, off, n, lbp);
     maybe_recheck = std::find(out, out + n, kRecheckStep) != out + n;
-    return probabilities_in_range(p, n);
+    return generic::values_in_range(p, n);
   }
   __m256i rc = _mm256_setzero_si256();
   const __m256 zero = _mm256_setzero_ps(), err = _mm256_set1_ps(1e-6f), one = _mm256_set1_ps(1.0f);

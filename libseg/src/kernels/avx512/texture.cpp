@@ -5,7 +5,6 @@
 
 #include "kernels/generic/texture_loops.hpp"
 #include "kernels/texture_impl.hpp"
-#include "occseg/grid.hpp"
 
 namespace occseg::kernels::avx512 {
 
@@ -113,7 +112,7 @@ __attribute__((target("avx512f,avx512bw,avx512vl"))) bool contrast_row_impl(cons
   if (x < n) contrast16<Vbmi>(p, o, x, static_cast<__mmask16>((1u << (n - x)) - 1), out, lbp, top_bits, rc);
   maybe_recheck = rc != 0;
   // One test per row instead of two compares per step; a row with -0.0 (valid) takes the exact check.
-  return _mm512_cmpgt_epu32_mask(top_bits, _mm512_set1_epi32(0x3F800000)) == 0 || probabilities_in_range(p, n);
+  return _mm512_cmpgt_epu32_mask(top_bits, _mm512_set1_epi32(0x3F800000)) == 0 || generic::values_in_range(p, n);
 }
 
 }  // namespace

@@ -13,6 +13,14 @@
 
 namespace occseg::kernels::generic {
 
+// True when every p[0, n) lies in [0, 1] (a NaN does not). Counts instead of stopping at the
+// first bad value, so that it vectorises.
+static inline __attribute__((always_inline)) bool values_in_range(const float* p, std::size_t n) {
+  std::size_t bad = 0;
+  for (std::size_t i = 0; i < n; ++i) bad += !((p[i] >= 0.0f) & (p[i] <= 1.0f));
+  return bad == 0;
+}
+
 // Parked steps (kRecheckStep where uncertain) of n consecutive voxels whose neighbours are those
 // of `Present`. texture_unit()'s arithmetic is in double; this loop runs in float, which is
 // exact for the comparisons (floats compare the same in double) and within 1e-6 of the double

@@ -46,6 +46,8 @@ void contrast_row_any(const float* p, const std::ptrdiff_t* off, std::size_t n, 
   if (lbp) lbp_any<0>(p, off, n, lbp, present);
 }
 
+bool values_in_range(const float* p, std::size_t n) { return generic::values_in_range(p, n); }
+
 bool any_recheck(const code_t* steps, std::size_t n) { return generic::any_recheck(steps, n); }
 
 // Four voxels whose steps are all 0 (flat regions: most of a map) are skipped with one test;

@@ -4,6 +4,8 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 
+#include "kernels/sse2/bit_rows.hpp"
+
 namespace occseg::kernels::sse2 {
 
 using generic::kFree;

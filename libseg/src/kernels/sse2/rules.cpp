@@ -6,6 +6,8 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 
+#include "kernels/sse2/bit_rows.hpp"
+
 namespace occseg::kernels::sse2 {
 
 void unpack_half(const word_t* bits, const std::uint8_t* own, std::size_t nx, std::uint8_t* out) {
