@@ -5,12 +5,15 @@
 #include <octomap/OcTree.h>
 
 #include <cstring>
+#include <memory>
 #include <random>
+#include <sstream>
 
 #include "occseg/error.hpp"
 #include "occseg/npy.hpp"
 #include "occseg/nrrd.hpp"
 #include "occseg/octomap_file.hpp"
+#include "occseg/octomap_tree.hpp"
 #include "occseg/pcd.hpp"
 #include "support.hpp"
 
@@ -274,11 +277,12 @@ TEST(AbsurdHeaders, PcdBtAndGraphCountsBeyondTheFileAreRefused) {
     const std::size_t s = bt.find("size ");
     ASSERT_NE(s, std::string::npos);
     const std::size_t e = bt.find('\n', s);
-    bt.replace(s, e - s, "size 1000000000000");
+    // OctoMap reads the size as a 32-bit unsigned: the largest count it can be promised.
+    bt.replace(s, e - s, "size 4000000000");
     put(dir + "/huge.bt", bt);
     const Outcome o = read_as("bt", dir + "/huge.bt");
     EXPECT_EQ(o.status, Status::format) << o.message;
-    EXPECT_NE(o.message.find("promises 1000000000000 nodes"), std::string::npos) << o.message;
+    EXPECT_NE(o.message.find("promises 4000000000 nodes"), std::string::npos) << o.message;
   }
   std::string graph = slurp(kData + "/spherical_scan.graph");
   {
@@ -288,5 +292,141 @@ TEST(AbsurdHeaders, PcdBtAndGraphCountsBeyondTheFileAreRefused) {
     const Outcome o = read_as("graph", dir + "/huge.graph");
     EXPECT_EQ(o.status, Status::format) << o.message;
     EXPECT_NE(o.message.find("truncated in points"), std::string::npos) << o.message;
+  }
+}
+
+// ---- Hostile files: what occseg checks must be what the library reads (issue 24) -----------
+
+namespace {
+
+// A small OcTree written by OctoMap: header words and tree bytes apart, to rebuild files with
+// other headers around the same tree bytes.
+struct TreeBytes {
+  std::string body;  // the tree data after the header
+  unsigned size = 0;
+};
+TreeBytes tree_bytes(bool binary) {
+  octomap::OcTree t(0.1);
+  for (int i = -5; i <= 5; ++i) t.updateNode(octomap::point3d(0.1f * i, 0.05f, 0.3f), i % 2 == 0);
+  t.updateInnerOccupancy();
+  std::ostringstream o;
+  if (binary) t.writeBinaryConst(o);
+  else t.write(o);
+  const std::string s = o.str();
+  const std::size_t data = s.find("\ndata\n");
+  return {s.substr(data + 6), static_cast<unsigned>(t.size())};
+}
+
+// What OctoMap itself makes of a file: the tree (nullptr when its reader refuses it).
+std::unique_ptr<octomap::AbstractOcTree> octomap_reads(const std::string& bytes, bool binary) {
+  std::istringstream in(bytes);
+  if (binary) {
+    auto t = std::make_unique<octomap::OcTree>(0.1);
+    if (!t->readBinary(in)) return nullptr;
+    return t;
+  }
+  return std::unique_ptr<octomap::AbstractOcTree>(octomap::AbstractOcTree::read(in));
+}
+
+// The file with the OctoMap payload of 0xff bytes of issue 24: liboctomap stops its header at the
+// word "data" in the middle of line 2, reads the '#' line as the tree and recurses until the stack
+// overflows; a line-by-line check found the second, harmless header and passed the file.
+std::string hostile_tree_file(bool binary) {
+  const std::string first = binary ? "# Octomap OcTree binary file\n" : "# Octomap OcTree file\n";
+  const std::string harmless = binary ? std::string("id OcTree\nsize 1\nres 0.1\ndata\n") + std::string(2, '\0')
+                                      : std::string("id OcTree\nsize 1\nres 0.1\ndata\n") + std::string(5, '\0');
+  return first + "id OcTree size 5 res 0.1 data\n#" + std::string(200000, '\xff') + "\n" + harmless;
+}
+
+}  // namespace
+
+TEST(HostileOctomap, DataWordInTheMiddleOfALineNeverReachesOctomapUnchecked) {
+  const std::string dir = scratch("hostile_octomap");
+  for (const bool binary : {true, false}) {
+    const std::string f = dir + (binary ? "/hostile.bt" : "/hostile.ot");
+    put(f, hostile_tree_file(binary));
+    // In a child: without the check the reader does not return (stack overflow in liboctomap).
+    const int rc = in_child([&] {
+      const Outcome o = read_as(binary ? "bt" : "ot", f);
+      const bool named = o.message.find(f) != std::string::npos;
+      const bool why = o.message.find(binary ? "deeper than 16 levels" : "is not finite") != std::string::npos;
+      return o.status == Status::format && named && why ? 0 : 1;
+    });
+    EXPECT_EQ(rc, 0) << f << (rc > 128 ? ": the reader crashed" : ": wrong status or message");
+  }
+}
+
+TEST(HostileOctomap, EveryHeaderLayoutOctomapAcceptsGivesOctomapsTreeAndNoOther) {
+  // Header variants around valid tree bytes; occseg must accept exactly the files OctoMap's own
+  // reader accepts and give the map of the tree OctoMap builds from them.
+  const std::string dir = scratch("octomap_headers");
+  for (const bool binary : {true, false}) {
+    const TreeBytes t = tree_bytes(binary);
+    const std::string n = std::to_string(t.size);
+    const std::vector<std::string> headers = {
+        "# c\nid OcTree\nsize " + n + "\nres 0.1\ndata\n",
+        "id OcTree size " + n + " res 0.1 data\n",                      // all on one line
+        "id\nOcTree\nsize\n" + n + "\nres\n0.1\ndata\n",                  // values on the next line
+        "id OcTree\nsize " + n + "\nres 0.1\ndata and more words\n",     // the rest of the data line
+        "id OcTree #size 99\nsize " + n + "\nres 0.1\ndata\n",           // '#' word: rest of line
+        "id OcTree\nfoo data\nsize " + n + "\nres 0.1\ndata\n",          // unknown word: rest of line
+        "id OcTree\r\nsize " + n + "\r\nres 0.1\r\ndata\r\n",            // CRLF
+        "id\tOcTree\tsize\t" + n + "\tres\t0.1\tdata\n",                  // tabs
+        "id OcTree\nsize " + n + "\nres 0.1\ndatadata\ndata\n",          // "data" inside a word
+        "id OcTree\nsize " + n + "\nres 0.1 data\n",                     // "data" after a value
+        "id OcTree\nsize " + n + "\nres 0.1\n",                          // no "data"
+        "id OcTree\nsize " + n + "\nres abc\ndata\n",                    // a value OctoMap cannot read
+        "size " + n + "\nres 0.1\ndata\n",                               // no id
+        "id OcTree\nsize -1\nres 0.1\ndata\n",                           // wraps to 2^32 - 1
+        "id OcTree\nsize " + n + "\nres 0\ndata\n",                      // res <= 0
+    };
+    for (std::size_t i = 0; i < headers.size(); ++i) {
+      const std::string bytes =
+          (binary ? "# Octomap OcTree binary file\n" : "# Octomap OcTree file\n") + headers[i] + t.body;
+      const std::string f = dir + "/h" + std::to_string(i) + (binary ? ".bt" : ".ot");
+      put(f, bytes);
+      const std::unique_ptr<octomap::AbstractOcTree> theirs = octomap_reads(bytes, binary);
+      // readBinary compares the tree with the header's size; AbstractOcTree::read (.ot) does not,
+      // occseg does for both (a size that does not match its tree is a corrupt file).
+      const bool lying_size = headers[i].find("size -1") != std::string::npos;
+      const bool octomap_ok = theirs && theirs->size() == t.size && !lying_size;
+      std::string msg;
+      Grid mine;
+      Status s = Status::ok;
+      try {
+        mine = read_octree_file(f);
+      } catch (const Error& e) {
+        s = e.status();
+        msg = e.what();
+      }
+      EXPECT_EQ(s == Status::ok, octomap_ok) << "header " << i << " of " << f << ": " << msg;
+      if (s != Status::ok) {
+        EXPECT_EQ(s, Status::format) << msg;
+        EXPECT_NE(msg.find(f), std::string::npos) << msg;
+        continue;
+      }
+      if (!octomap_ok) continue;
+      const Grid expect = grid_from_octree(*dynamic_cast<const octomap::OcTree*>(theirs.get()));
+      EXPECT_TRUE(mine.dims == expect.dims) << "header " << i;
+      EXPECT_EQ(mine.origin, expect.origin) << "header " << i;
+      EXPECT_EQ(mine.p, expect.p) << "header " << i;
+    }
+  }
+}
+
+TEST(HostileOctomap, ScanGraphDoublesBeyondTheFloatRangeAreRefused) {
+  // OctoMap reads the graph's doubles into floats: a finite value beyond the float range is an
+  // undefined conversion there (in practice infinity: the point silently became a hole).
+  const std::string dir = scratch("graph_float_range");
+  const std::string graph = slurp(kData + "/spherical_scan.graph");
+  for (const std::size_t at : {std::size_t(4 + 4 + 4), graph.size() - 4 - 4 - 8 * 4 - 4 - 8 * 3}) {
+    std::string c = graph;  // the first coordinate of the first point, then the pose's x
+    const double huge = 1e300;
+    std::memcpy(&c[at], &huge, 8);
+    const std::string f = dir + "/far.graph";
+    put(f, c);
+    const Outcome o = read_as("graph", f);
+    EXPECT_EQ(o.status, Status::format) << at << ": " << o.message;
+    EXPECT_NE(o.message.find("beyond the range of a float"), std::string::npos) << o.message;
   }
 }
