@@ -430,3 +430,63 @@ TEST(HostileOctomap, ScanGraphDoublesBeyondTheFloatRangeAreRefused) {
     EXPECT_NE(o.message.find("beyond the range of a float"), std::string::npos) << o.message;
   }
 }
+
+namespace {
+
+// An .npy file (format 1.0) with `dict` as its header and 64 float zeros of data.
+std::string npy_with_header(const std::string& dict) {
+  std::string h = dict;
+  h.append((64 - (10 + h.size() + 1) % 64) % 64, ' ');
+  h.push_back('\n');
+  return std::string("\x93NUMPY\x01\x00", 8) + char(h.size() & 0xff) + char(h.size() >> 8) + h + std::string(256, '\0');
+}
+
+}  // namespace
+
+TEST(HostileNpy, HeadersNumpyRefusesOrReadsOtherwiseAreRefused) {
+  // The header is a Python dict literal that NumPy evaluates (ast.literal_eval): a repeated key
+  // keeps its last value, text in a string value is no key, "(8)" is an int. A text search for
+  // "'shape'" read all of these, with a shape NumPy would not give or for a file it refuses.
+  const std::string dir = scratch("hostile_npy");
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {"{'descr': '<f4', 'fortran_order': False, 'shape': (2,2,2), 'shape': (4,4,4)}", "'shape' appears twice"},
+      {"{'descr': '<f4', 'fortran_order': False, 'shape': (4,4,4), 'shape': (2,2,2)}", "'shape' appears twice"},
+      {"{'descr': '<f4', 'descr': '<f8', 'fortran_order': False, 'shape': (2,2,2)}", "'descr' appears twice"},
+      {"{'descr': '<f4', 'fortran_order': False, 'note': \"'shape': (4,4,4)\", 'shape': (2,2,2)}",
+       "header key 'note' is not one of"},
+      {"{'descr': \"<f4', 'shape': (4,4,4), 'x': '\", 'fortran_order': False, 'shape': (2,2,2)}",
+       "dtype '<f4', 'shape': (4,4,4), 'x': '' is not supported"},
+      {"{'descr': '<f4', 'fortran_order': False, 'shape': (64)}", "an integer in parentheses, not a tuple"},
+      {"{'descr': '<f4', 'fortran_order': 0, 'shape': (4,4,4)}", "'fortran_order' is not True or False"},
+      {"{'descr': '<f4', 'fortran_order': False}", "header has no 'shape'"},
+      {"{'descr': '<f4', 'fortran_order': False, 'shape': (4,4,4)} 'shape': (2,2,2)", "text after its dict"},
+      {"{'descr': '<f4', 'fortran_order': False, 'shape': (4,4,-4)}", "negative"},
+      {"{'descr': '<f4', 'fortran_order': False, 'shape': (4,4,4),, }", "a dict key is not a quoted string"},
+      {"{'descr': '<f4' '<f8', 'fortran_order': False, 'shape': (4,4,4)}", "two adjacent strings"},
+      {"{'descr': '<f4', 'fortran_order': False, 'shape': (4, 4, 4.0)}", "not a plain decimal integer"},
+      {"{'descr': '<f4', 'fortran_order': False, 'shape': (4, 4, 04)}", "leading zero"},
+      {"{'descr': '\\x1b[31m', 'fortran_order': False, 'shape': (4,4,4)}", "has an escape sequence"},
+  };
+  for (std::size_t i = 0; i < refused.size(); ++i) {
+    const std::string f = dir + "/r" + std::to_string(i) + ".npy";
+    put(f, npy_with_header(refused[i].first));
+    const Outcome o = read_as("npy", f);
+    EXPECT_EQ(o.status, Status::format) << refused[i].first << ": " << o.message;
+    EXPECT_NE(o.message.find(refused[i].second), std::string::npos) << refused[i].first << ": " << o.message;
+    EXPECT_NE(o.message.find(f), std::string::npos) << o.message;
+  }
+  // What NumPy reads, occseg reads with the same shape: either quote, comments, whitespace and a
+  // trailing comma anywhere Python allows them.
+  const std::vector<std::string> read = {
+      "{'descr': '<f4', 'fortran_order': False, 'shape': (4, 4, 4), }",
+      "{\"descr\": \"<f4\", \"fortran_order\": False, \"shape\": (4,4,4)}",
+      "{'shape': (4, 4, 4), 'fortran_order': False, 'descr': '<f4'}",
+      "  {'descr': '<f4', # a comment\n 'fortran_order': False,\n 'shape': (4,\n 4, 4,)}  # after",
+  };
+  for (std::size_t i = 0; i < read.size(); ++i) {
+    const std::string f = dir + "/a" + std::to_string(i) + ".npy";
+    put(f, npy_with_header(read[i]));
+    const NpyArray a = read_npy(f);
+    EXPECT_EQ(a.shape, (std::vector<std::size_t>{4, 4, 4})) << read[i];
+  }
+}
