@@ -11,6 +11,7 @@
 #include "occseg/nrrd.hpp"
 #include "occseg/occseg_plugin.h"
 #include "occseg/registry.hpp"
+#include "nrrd_space.hpp"
 
 namespace {
 
@@ -81,7 +82,9 @@ int read_npy_map(const occseg_plugin_call* call, const char* path, const char* c
 int read_nrrd_map(const occseg_plugin_call* call, const char* path, const char* const* options, occseg_plugin_map_sink* sink) {
   return guarded(call, [&] {
     voxel_size_option(path, options, false);
-    deliver(call, sink, occseg::grid_from_nrrd(occseg::read_nrrd(path), path));
+    const occseg::NrrdVolume v = occseg::read_nrrd(path);
+    deliver(call, sink, occseg::grid_from_nrrd(v, path));
+    occseg::capi::nrrd_space_slot() = v.space;  // the map keeps the file's space (occseg_map_read)
   });
 }
 
@@ -95,7 +98,7 @@ int write_npy_map(const occseg_plugin_call* call, const char* path, const occseg
 int write_nrrd_map(const occseg_plugin_call* call, const char* path, const occseg_plugin_grid* grid, const char* const* options) {
   return guarded(call, [&] {
     voxel_size_option(path, options, false);
-    occseg::write_grid_nrrd(path, grid_of(grid));
+    occseg::write_grid_nrrd(path, grid_of(grid), occseg::capi::nrrd_space_slot());
   });
 }
 
@@ -124,3 +127,8 @@ const occseg_plugin_descriptor kBuiltinIo = {
 [[maybe_unused]] const bool kRegistered = (occseg::register_static_plugin(&kBuiltinIo), true);
 
 }  // namespace
+
+std::string& occseg::capi::nrrd_space_slot() {
+  thread_local std::string space;
+  return space;
+}

@@ -64,7 +64,8 @@ int run(const SegmentArgs& o) {
   const std::string preset = preset_name(params.preset);
   std::vector<std::pair<std::string, std::function<void(const std::string&)>>> files;
   files.emplace_back("labels.npy", [&](const std::string& f) { write_labels_npy(f, r.dims, r.labels); });
-  files.emplace_back("labels.nrrd", [&](const std::string& f) { write_labels_nrrd(f, grid, r.labels); });
+  // In the input's space (an LPS volume's labels in LPS, lying on it in 3D Slicer).
+  files.emplace_back("labels.nrrd", [&](const std::string& f) { write_labels_nrrd(f, grid, r.labels, input.nrrd_space); });
   if (input.kind != InputKind::volume)
     files.emplace_back("map.nrrd", [&](const std::string& f) { write_grid_nrrd(f, grid); });
   if (input.kind == InputKind::cloud && have_pcl())
