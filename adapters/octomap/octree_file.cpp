@@ -47,7 +47,7 @@ Header parse_header(const std::string& b, const std::string& path) {
   if (!raw.complete) bad(path, raw.id.empty() ? "the header has no 'id'" : "the header has no valid 'res'");
   Header h;
   h.binary = raw.binary;
-  h.id = raw.id == "1" ? "OcTree" : raw.id;  // deprecated id, as OctoMap maps it
+  h.id = raw.id;
   h.size = raw.size;
   h.res = raw.res;
   h.data = raw.data;

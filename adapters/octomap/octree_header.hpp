@@ -27,7 +27,7 @@ struct RawHeader {
   bool binary = false;      // kBinaryHeader
   bool data_word = false;   // the word "data" ended the header
   bool complete = false;    // readHeader's checks passed: "data" seen, id not empty, res > 0
-  std::string id;           // as read ("1" is not yet mapped to "OcTree")
+  std::string id;           // as readHeader leaves it (the deprecated "1" becomes "OcTree")
   unsigned size = 0;        // readHeader reads an unsigned (32 bits)
   double res = 0;
   std::size_t data = 0;     // offset of the first byte of tree data
@@ -69,7 +69,9 @@ inline bool read_header_like_octomap(std::istream& s, std::string& id, unsigned&
     }
   }
   data_word = header_read;
-  return header_read && !id.empty() && !(res <= 0.0);
+  if (!header_read || id.empty() || res <= 0.0) return false;
+  if (id == "1") id = "OcTree";  // the deprecated id, mapped by readHeader itself
+  return true;
 }
 
 // The header of a whole file held in `bytes`, as AbstractOcTree::read (.ot) and
