@@ -433,7 +433,7 @@ TEST(HostileOctomap, ScanGraphDoublesBeyondTheFloatRangeAreRefused) {
 
 namespace {
 
-// An .npy file (format 1.0) with `dict` as its header and 64 float zeros of data.
+// An .npy file (format 1.0) with `dict` as its header and 256 zero bytes of data.
 std::string npy_with_header(const std::string& dict) {
   std::string h = dict;
   h.append((64 - (10 + h.size() + 1) % 64) % 64, ' ');
@@ -488,5 +488,41 @@ TEST(HostileNpy, HeadersNumpyRefusesOrReadsOtherwiseAreRefused) {
     put(f, npy_with_header(read[i]));
     const NpyArray a = read_npy(f);
     EXPECT_EQ(a.shape, (std::vector<std::size_t>{4, 4, 4})) << read[i];
+  }
+}
+
+TEST(HostileMessages, FileBytesQuotedInMessagesAreEscapedAndCapped) {
+  // A garbage header once came back in the message byte for byte: terminal control sequences
+  // (here: set the window title, red text) reached whoever printed it. Every reader quotes file
+  // bytes through printable(): \xNN for what is not printable ASCII, and at most a few dozen.
+  const std::string dir = scratch("hostile_messages");
+  const std::string evil = std::string("\x1b]0;owned\x07\x1b[31m\xff\xfe") + std::string(5000, 'A');
+  const std::string pcd_head = "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n";
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {"pcd", pcd_head + evil + "\nDATA ascii\n"},
+      {"pcd", pcd_head + "WIDTH " + evil + "\nDATA ascii\n"},
+      {"pcd", "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F " + evil + "\nCOUNT 1 1 1\nDATA ascii\n"},
+      {"npy", npy_with_header("{'descr': '" + evil + "', 'fortran_order': False, 'shape': (4,4,4)}")},
+      {"npy", npy_with_header("{'" + evil + "': '<f4', 'fortran_order': False, 'shape': (4,4,4)}")},
+      {"npy", npy_with_header("{'descr': '<f4', 'fortran_order': False, 'shape': (4,4,4)} " + evil)},
+      {"nrrd", "NRRD0004\n" + evil + "\n\n"},
+      {"nrrd", "NRRD0004\n" + evil + ": x\n\n"},
+      {"nrrd", "NRRD0004\ntype: " + evil + "\n\n"},
+      {"nrrd", "NRRD0004\ntype: float\ndimension: 3\nspace: " + evil + "\n\n"},
+      {"nrrd", "NRRD" + evil + "\n\n"},
+      {"bt", "# Octomap OcTree binary file\nid " + evil + "\nsize 0\nres 0.1\ndata\n"},
+      {"ot", "# Octomap OcTree file\nid " + evil + "\nsize 0\nres 0.1\ndata\n"},
+  };
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    const std::string f = dir + "/m" + std::to_string(i) + "." + files[i].first;
+    put(f, files[i].second);
+    const Outcome o = read_as(files[i].first, f);
+    ASSERT_NE(o.status, Status::ok) << f;
+    std::string raw;
+    for (const char c : o.message)
+      if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) raw += c;
+    EXPECT_TRUE(raw.empty()) << f << ": the message carries raw bytes";
+    EXPECT_NE(o.message.find("\\x1b"), std::string::npos) << f << ": " << o.message;
+    EXPECT_LT(o.message.size(), f.size() + 300) << f << ": " << o.message;
   }
 }
