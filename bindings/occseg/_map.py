@@ -112,8 +112,9 @@ class Map(Owned):
 
     def write(self, path, **options):
         """Writes the map with the library's writer for the path's extension (.npy: float32
-        [z, y, x]; .nrrd: with voxel size and origin; more from plugins); keywords become writer
-        options "key=value". All or nothing."""
+        [z, y, x]; .nrrd: with voxel size and origin, in the space of the .nrrd the map was read
+        from, else right-anterior-superior; more from plugins); keywords become writer options
+        "key=value". All or nothing."""
         if has("occseg_map_write_options"):
             check(lib.occseg_map_write_options(self.handle, os.fsencode(path), option_array("occseg_map_write", options)))
         elif options:
