@@ -6,7 +6,6 @@
 #include <cstring>
 #include <istream>
 #include <limits>
-#include <streambuf>
 #include <string>
 
 #include "occseg/error.hpp"
@@ -84,15 +83,6 @@ struct GraphChecker {
   }
 };
 
-// Reads a byte string in place (an istringstream would copy it).
-class ByteStream : public std::streambuf {
- public:
-  explicit ByteStream(const std::string& b) {
-    char* p = const_cast<char*>(b.data());  // only read: the get area is never written
-    setg(p, p, p + b.size());
-  }
-};
-
 }  // namespace
 
 Grid integrate_scan_graph(const octomap::ScanGraph& graph, const ScanOptions& options) {
@@ -137,7 +127,7 @@ Grid read_scan_graph(const std::string& path, const ScanOptions& options) {
   // since the fusion uses the scans and their poses only.
   octomap::ScanGraph graph;
   {
-    ByteStream buf(bytes);
+    BytesBuf buf(bytes);
     std::istream in(&buf);
     std::uint32_t nodes = 0;
     in.read(reinterpret_cast<char*>(&nodes), sizeof nodes);

@@ -5,10 +5,14 @@
 #include <pcl/exceptions.h>
 #include <pcl/io/pcd_io.h>
 
+#include <sys/mman.h>
+#include <unistd.h>
+
 #include <cctype>
 #include <cerrno>
 #include <cstring>
-#include <fstream>
+#include <istream>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -45,10 +49,9 @@ void check_xyz_fields(const std::string& path, const pcl::PCLPointCloud2& blob) 
 // PCL's reader trusts the header (a file without fields or sizes crashes it), so the header
 // is checked here first: consistent field lists, WIDTH x HEIGHT = POINTS, and enough bytes for
 // the binary encodings.
-void check_header(const std::string& path) {
-  check_readable(path);
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(Status::io, "cannot open '" + path + "': " + std::strerror(errno));
+void check_header(const std::string& path, const std::string& bytes) {
+  BytesBuf buf(bytes);
+  std::istream in(&buf);
   std::size_t nfields = 0, nsize = 0, ntype = 0, ncount = 0, point_bytes = 0, width = 0, height = 1, points = 0;
   std::vector<std::size_t> sizes, counts;
   bool have_width = false, have_points = false;
@@ -145,11 +148,46 @@ void check_header(const std::string& path) {
                                            std::to_string(left - 8));
 }
 
+
+// PCL reads from a path. It is given a private in-memory copy of the checked bytes (a memfd,
+// opened as /proc/self/fd/N), so it parses exactly what was checked: reading the path a second
+// time would read whatever the file holds by then. Where memfd or /proc is missing, the path.
+class CheckedCopy {
+ public:
+  CheckedCopy(const std::string& bytes, const std::string& path) : path_(path) {
+    fd_ = ::memfd_create("occseg-pcd", MFD_CLOEXEC);
+    if (fd_ < 0) return;
+    for (std::size_t done = 0; done < bytes.size();) {
+      const ssize_t n = ::write(fd_, bytes.data() + done, bytes.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) throw Error(Status::no_memory, "'" + path + "': no memory for a private copy of the file");
+      done += static_cast<std::size_t>(n);
+    }
+    const std::string proc = "/proc/self/fd/" + std::to_string(fd_);
+    if (::access(proc.c_str(), R_OK) == 0) path_ = proc;
+  }
+  ~CheckedCopy() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  CheckedCopy(const CheckedCopy&) = delete;
+  CheckedCopy& operator=(const CheckedCopy&) = delete;
+  const std::string& path() const { return path_; }
+
+ private:
+  int fd_ = -1;
+  std::string path_;
+};
+
 }  // namespace
 
 Grid read_pcd(const std::string& path, const ScanOptions& options) {
   options.validate();
-  check_header(path);
+  std::optional<CheckedCopy> copy;
+  {
+    const std::string bytes = read_file(path);
+    check_header(path, bytes);
+    copy.emplace(bytes, path);
+  }  // the bytes are freed before PCL allocates its own
   pcl::PCLPointCloud2 blob;
   Eigen::Vector4f origin = Eigen::Vector4f::Zero();
   Eigen::Quaternionf orientation = Eigen::Quaternionf::Identity();
@@ -157,7 +195,7 @@ Grid read_pcd(const std::string& path, const ScanOptions& options) {
   int rc = 0;
   try {
     pcl::PCDReader reader;
-    rc = reader.read(path, blob, origin, orientation, version, 0);
+    rc = reader.read(copy->path(), blob, origin, orientation, version, 0);
   } catch (const pcl::PCLException& e) {
     bad_file(path, printable(e.detailedMessage(), 200));
   } catch (const std::bad_alloc&) {

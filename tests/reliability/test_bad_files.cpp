@@ -4,10 +4,16 @@
 #include <octomap/ColorOcTree.h>
 #include <octomap/OcTree.h>
 
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/stat.h>
+
+#include <atomic>
 #include <cstring>
 #include <memory>
 #include <random>
 #include <sstream>
+#include <thread>
 
 #include "occseg/error.hpp"
 #include "occseg/npy.hpp"
@@ -526,5 +532,91 @@ TEST(HostileMessages, FileBytesQuotedInMessagesAreEscapedAndCapped) {
     EXPECT_TRUE(raw.empty()) << f << ": the message carries raw bytes";
     EXPECT_NE(o.message.find("\\x1b"), std::string::npos) << f << ": " << o.message;
     EXPECT_LT(o.message.size(), f.size() + 300) << f << ": " << o.message;
+  }
+}
+
+namespace {
+
+// A FIFO whose first reader gets `first` and every later reader `later`: a file that changes
+// between two reads, deterministically. Stopped (and joined) by the destructor.
+class ChangingFile {
+ public:
+  ChangingFile(const std::string& path, std::string first, std::string later) : path_(path) {
+    ::unlink(path.c_str());
+    if (::mkfifo(path.c_str(), 0600) != 0) throw std::runtime_error("mkfifo failed");
+    ::signal(SIGPIPE, SIG_IGN);  // a reader may close before the content is written
+    writer_ = std::thread([this, first = std::move(first), later = std::move(later)] {
+      for (int k = 0;; ++k) {
+        const int fd = ::open(path_.c_str(), O_WRONLY);  // waits for the next reader
+        if (stop_) {
+          if (fd >= 0) ::close(fd);
+          return;
+        }
+        if (fd < 0) return;
+        const std::string& b = k == 0 ? first : later;
+        for (std::size_t done = 0; done < b.size();) {
+          const ssize_t n = ::write(fd, b.data() + done, b.size() - done);
+          if (n <= 0) break;
+          done += static_cast<std::size_t>(n);
+        }
+        ::close(fd);
+        // The next content is for the next reader: wait until this one has closed the FIFO
+        // (a non-blocking open for writing fails with ENXIO once no reader holds it).
+        for (;;) {
+          const int probe = ::open(path_.c_str(), O_WRONLY | O_NONBLOCK);
+          if (probe < 0) break;
+          ::close(probe);
+          if (stop_) return;
+          std::this_thread::yield();
+        }
+      }
+    });
+  }
+  ~ChangingFile() {
+    stop_ = true;
+    const int fd = ::open(path_.c_str(), O_RDONLY | O_NONBLOCK);  // releases the waiting writer
+    writer_.join();
+    if (fd >= 0) ::close(fd);
+    ::unlink(path_.c_str());
+  }
+
+ private:
+  std::string path_;
+  std::atomic<bool> stop_{false};
+  std::thread writer_;
+};
+
+}  // namespace
+
+TEST(HostileFiles, TheLibraryReadsTheBytesThatWereCheckedNotTheFileAgain) {
+  // The .pcd and .graph readers checked the file and then handed its path to PCL or OctoMap,
+  // which opened it again: a file changed in between was read unchecked. Here the second read
+  // gets another valid file; the map must still be the map of the first, checked, bytes.
+  const std::string dir = scratch("changing_file");
+  ScanOptions o;
+  o.voxel_size = 0.1;
+  o.bbox = Box{{-2, -2, -1}, {2, 2, 3}};
+  o.threads = 1;
+  const std::string head = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\n"
+                           "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n";
+  const std::string pcd_a = head + "0.5 0.5 1.5\n-0.5 0.2 2.5\n", pcd_b = head + "1.5 -1.5 0.5\n1 1 1\n";
+  put(dir + "/a.pcd", pcd_a);
+  const Grid expect_pcd = read_pcd(dir + "/a.pcd", o);
+  {
+    ChangingFile f(dir + "/changing.pcd", pcd_a, pcd_b);
+    Grid g;
+    ASSERT_NO_THROW(g = read_pcd(dir + "/changing.pcd", o));
+    EXPECT_EQ(g.p, expect_pcd.p) << "the .pcd was read a second time";
+  }
+  std::string graph_a = slurp(kData + "/spherical_scan.graph"), graph_b = graph_a;
+  const double moved = 0.7;
+  std::memcpy(&graph_b[graph_b.size() - 4 - 4 - 32 - 4 - 24], &moved, 8);  // the node's pose x
+  put(dir + "/a.graph", graph_a);
+  const Grid expect_graph = read_scan_graph(dir + "/a.graph", o);
+  {
+    ChangingFile f(dir + "/changing.graph", graph_a, graph_b);
+    Grid g;
+    ASSERT_NO_THROW(g = read_scan_graph(dir + "/changing.graph", o));
+    EXPECT_EQ(g.p, expect_graph.p) << "the .graph was read a second time";
   }
 }
