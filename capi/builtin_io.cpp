@@ -12,6 +12,7 @@
 #include "occseg/occseg_plugin.h"
 #include "occseg/plugin_host.hpp"
 #include "occseg/registry.hpp"
+#include "nrrd_space.hpp"
 
 namespace {
 
@@ -82,7 +83,9 @@ int read_npy_map(const occseg_plugin_call* call, const char* path, const char* c
 int read_nrrd_map(const occseg_plugin_call* call, const char* path, const char* const* options, occseg_plugin_map_sink* sink) {
   return guarded(call, [&] {
     voxel_size_option(path, options, false);
-    deliver(call, sink, occseg::grid_from_nrrd(occseg::read_nrrd(path), path));
+    const occseg::NrrdVolume v = occseg::read_nrrd(path);
+    deliver(call, sink, occseg::grid_from_nrrd(v, path));
+    occseg::capi::nrrd_space_slot() = v.space;  // the map keeps the file's space (occseg_map_read)
   });
 }
 
@@ -96,7 +99,7 @@ int write_npy_map(const occseg_plugin_call* call, const char* path, const occseg
 int write_nrrd_map(const occseg_plugin_call* call, const char* path, const occseg_plugin_grid* grid, const char* const* options) {
   return guarded(call, [&] {
     voxel_size_option(path, options, false);
-    occseg::write_grid_nrrd(path, grid_of(grid));
+    occseg::write_grid_nrrd(path, grid_of(grid), occseg::capi::nrrd_space_slot());
   });
 }
 
@@ -125,3 +128,8 @@ const occseg_plugin_descriptor kBuiltinIo = {
 [[maybe_unused]] const bool kRegistered = (occseg::register_static_plugin(&kBuiltinIo), true);
 
 }  // namespace
+
+std::string& occseg::capi::nrrd_space_slot() {
+  thread_local std::string space;
+  return space;
+}

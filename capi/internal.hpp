@@ -23,6 +23,7 @@ struct occseg_params {
 
 struct occseg_map {
   occseg::Grid grid;
+  std::string nrrd_space;  // the named space of the .nrrd file it was read from; "" otherwise
 };
 
 struct occseg_context {

@@ -5,6 +5,7 @@
 
 #include "internal.hpp"
 #include "occseg/occseg_plugin.h"
+#include "nrrd_space.hpp"
 #include "occseg/registry.hpp"
 
 using occseg::Error;
@@ -181,7 +182,9 @@ int occseg_map_read_options(occseg_map** out, const char* path, const char* cons
     *out = nullptr;
     require(path, "path");
     auto m = std::make_unique<occseg_map>();
+    const occseg::capi::NrrdSpaceScope space;  // the built-in .nrrd reader reports the file's space
     m->grid = occseg::read_map(path, option_list(options));
+    m->nrrd_space = space.value();
     *out = m.release();
   });
 }
@@ -190,6 +193,7 @@ int occseg_map_write_options(const occseg_map* map, const char* path, const char
   return guard("occseg_map_write", [&] {
     require(map, "map");
     require(path, "path");
+    const occseg::capi::NrrdSpaceScope space(map->nrrd_space);  // for the built-in .nrrd writer
     occseg::write_map(path, map->grid, option_list(options));
   });
 }

@@ -1,12 +1,10 @@
 // .bt and .ot files. OctoMap's readers trust the file: a truncated or corrupt body makes them
-// read uninitialised bytes and recurse without bound. So the structure is walked here first
-// (bounded depth, every byte accounted for), and only a file that passes goes to OctoMap.
-#include <cerrno>
+// read uninitialised bytes and recurse without bound. So the header is parsed here as OctoMap
+// parses it, the tree structure is walked (bounded depth, every byte accounted for), and only the
+// walked tree bytes of a file that passes go to OctoMap.
 #include <cmath>
+#include <cstdio>
 #include <cstring>
-#include <fstream>
-#include <iterator>
-#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -14,6 +12,7 @@
 #include "occseg/error.hpp"
 #include "occseg/file_read.hpp"
 #include "occseg/octomap_tree.hpp"
+#include "octree_header.hpp"
 
 namespace occseg {
 
@@ -27,43 +26,37 @@ constexpr int kTreeDepth = 16;  // octomap's OcTree, ColorOcTree and OcTreeStamp
 
 std::string slurp(const std::string& path) { return read_file(path); }
 
+// OctoMap's keys are 16 bits per axis: coordinates span +-2^15 voxels around the origin.
+constexpr double kKeyHalfRange = 32768.0;
+
 struct Header {
   bool binary = false;  // .bt ("# Octomap OcTree binary file") or .ot ("# Octomap OcTree file")
   std::string id;
-  unsigned long size = 0;
+  unsigned size = 0;
   double res = 0;
   std::size_t data = 0;  // offset of the first data byte
 };
 
-// The text header, as OctoMap's AbstractOcTree::readHeader reads it: keyword lines up to "data".
+// The text header, parsed as liboctomap parses it (octree_header.hpp), plus what occseg needs
+// beyond liboctomap's own checks: a resolution at which every key has a finite coordinate.
 Header parse_header(const std::string& b, const std::string& path) {
+  const octree_detail::RawHeader raw = octree_detail::parse_raw_header(b);
+  if (!raw.first_line)
+    bad(path, "the first line is not an OctoMap header (legacy .bt files: convert them with convert_octree)");
+  if (!raw.data_word) bad(path, "the header has no 'data' word (or a value OctoMap cannot read before it)");
+  if (!raw.complete) bad(path, raw.id.empty() ? "the header has no 'id'" : "the header has no valid 'res'");
   Header h;
-  const std::size_t eol = b.find('\n');
-  const std::string first = b.substr(0, eol);
-  if (first.rfind("# Octomap OcTree binary file", 0) == 0) h.binary = true;
-  else if (first.rfind("# Octomap OcTree file", 0) == 0) h.binary = false;
-  else bad(path, "the first line is not an OctoMap header (legacy .bt files: convert them with convert_octree)");
-  std::size_t pos = eol == std::string::npos ? b.size() : eol + 1;
-  bool have_size = false, have_res = false;
-  while (pos < b.size()) {
-    std::size_t e = b.find('\n', pos);
-    if (e == std::string::npos) bad(path, "the header has no 'data' line");
-    std::istringstream line(b.substr(pos, e - pos));
-    pos = e + 1;
-    std::string key;
-    if (!(line >> key) || key[0] == '#') continue;
-    if (key == "data") {
-      h.data = pos;
-      if (h.id.empty()) bad(path, "the header has no 'id'");
-      if (!have_size || !have_res || !(h.res > 0) || !std::isfinite(h.res)) bad(path, "the header has no valid 'size' and 'res'");
-      if (h.id == "1") h.id = "OcTree";  // deprecated id, as OctoMap maps it
-      return h;
-    }
-    if (key == "id") line >> h.id;
-    else if (key == "size") have_size = static_cast<bool>(line >> h.size);
-    else if (key == "res") have_res = static_cast<bool>(line >> h.res);
+  h.binary = raw.binary;
+  h.id = raw.id;
+  h.size = raw.size;
+  h.res = raw.res;
+  h.data = raw.data;
+  if (!(h.res > 0) || !std::isfinite(h.res * kKeyHalfRange)) {
+    char t[40];
+    std::snprintf(t, sizeof t, "%.17g", h.res);
+    bad(path, std::string("resolution ") + t + " is too large for OctoMap's 16-bit keys");
   }
-  bad(path, "the header has no 'data' line");
+  return h;
 }
 
 // Walks a .bt body (2 bytes per inner node: 2 bits per child, 01 free leaf, 10 occupied leaf,
@@ -104,13 +97,22 @@ struct Walker {
   }
 };
 
+// The tree from the checked tree bytes alone: liboctomap never sees the header (its own header
+// parser is what the check above mirrors), so it reads exactly the bytes the walk accounted for.
+// Constructing the tree at the header's resolution and reading its data is what
+// AbstractOcTree::read (.ot: createTree, readData) and readBinary (.bt: readBinaryData) do after
+// their header.
 template <typename Tree>
-Grid read_full(const std::string& bytes, const Header& h, const std::string& path, const OctreeOptions& o) {
-  std::istringstream in(bytes);
-  std::unique_ptr<octomap::AbstractOcTree> t(octomap::AbstractOcTree::read(in));
-  const Tree* tree = dynamic_cast<const Tree*>(t.get());
-  if (!tree) bad(path, "OctoMap could not read a tree of type '" + h.id + "'");
-  return grid_from_octree(*tree, o);
+Grid read_tree(const std::string& body, const Header& h, const std::string& path, const OctreeOptions& o) {
+  Tree tree(h.res);
+  std::istringstream in(body);
+  if (h.size > 0) {
+    if (h.binary) tree.readBinaryData(in);
+    else tree.readData(in);
+  }
+  if (in.fail() || tree.size() != h.size)
+    bad(path, "OctoMap read " + std::to_string(tree.size()) + " nodes of the " + std::to_string(h.size) + " checked");
+  return grid_from_octree(tree, o);
 }
 
 }  // namespace
@@ -121,31 +123,28 @@ Grid read_octree_file(const std::string& path, const OctreeOptions& options) {
   const Header h = parse_header(bytes, path);
   Walker w{bytes, path, h.data};
   if (h.binary) {
-    if (h.id != "OcTree") throw Error(Status::unsupported, "'" + path + "': binary tree type '" + h.id + "' is not supported");
+    if (h.id != "OcTree")
+      throw Error(Status::unsupported, "'" + path + "': binary tree type '" + printable(h.id) + "' is not supported");
     if (h.size > 0) {
       w.nodes = 1;
       w.binary_node(0);
     }
   } else {
-    if (h.id == "OcTree") w.payload = 4;                // float log-odds
-    else if (h.id == "ColorOcTree") w.payload = 7;      // + r, g, b
-    else if (h.id == "OcTreeStamped") w.payload = 8;    // + uint32 time stamp
-    else throw Error(Status::unsupported, "'" + path + "': tree type '" + h.id +
+    // OcTreeNode::readData reads the float log-odds alone; ColorOcTreeNode adds r, g, b. An
+    // OcTreeStamped node is written and read as a plain OcTreeNode (its time stamp is not saved).
+    if (h.id == "OcTree" || h.id == "OcTreeStamped") w.payload = 4;
+    else if (h.id == "ColorOcTree") w.payload = 7;
+    else throw Error(Status::unsupported, "'" + path + "': tree type '" + printable(h.id) +
                                               "' is not supported (OcTree, ColorOcTree, OcTreeStamped)");
     if (h.size > 0) w.full_node(0);
   }
   if (w.nodes != h.size)
     bad(path, "the header promises " + std::to_string(h.size) + " nodes, the data holds " + std::to_string(w.nodes));
+  const std::string body = bytes.substr(h.data, w.pos - h.data);
   try {
-    if (h.binary) {
-      octomap::OcTree tree(h.res);
-      std::istringstream in(bytes);
-      if (!tree.readBinary(in)) bad(path, "OctoMap's readBinary failed");
-      return grid_from_octree(tree, options);
-    }
-    if (h.id == "OcTree") return read_full<octomap::OcTree>(bytes, h, path, options);
-    if (h.id == "ColorOcTree") return read_full<octomap::ColorOcTree>(bytes, h, path, options);
-    return read_full<octomap::OcTreeStamped>(bytes, h, path, options);
+    if (h.binary || h.id == "OcTree") return read_tree<octomap::OcTree>(body, h, path, options);
+    if (h.id == "ColorOcTree") return read_tree<octomap::ColorOcTree>(body, h, path, options);
+    return read_tree<octomap::OcTreeStamped>(body, h, path, options);
   } catch (const Error& e) {
     if (e.status() == Status::format) throw;
     throw Error(e.status(), "'" + path + "': " + e.what());

@@ -30,7 +30,14 @@ Grid tree_to_grid(const Tree& tree, const OctreeOptions& o) {
   const long centre = long(1) << (depth - 1);  // octomap's tree_max_val: key of coordinate 0
   long f = 1;
   if (o.voxel_size > 0) {
-    f = std::lround(o.voxel_size / res);
+    // The ratio is bounded before it becomes an integer (a voxel larger than the whole key
+    // range, 2^16 tree voxels, is no multiple this tree can use).
+    const double ratio = o.voxel_size / res;
+    if (!(ratio >= 0.5 && ratio <= 65536))
+      throw Error(Status::invalid_argument, "voxel size " + std::to_string(o.voxel_size) +
+                                                " m is not a whole multiple of the tree's resolution " +
+                                                std::to_string(res) + " m between 1 and 65536");
+    f = std::lround(ratio);
     if (f < 1 || std::fabs(double(f) * res - o.voxel_size) > 1e-6 * o.voxel_size)
       throw Error(Status::invalid_argument, "voxel size " + std::to_string(o.voxel_size) +
                                                 " m is not a whole multiple of the tree's resolution " +
@@ -40,8 +47,19 @@ Grid tree_to_grid(const Tree& tree, const OctreeOptions& o) {
   long lo[3], hi[3];
   if (o.bbox) {
     for (int k = 0; k < 3; ++k) {
-      lo[k] = static_cast<long>(std::floor(o.bbox->min[k] / res + 1e-9)) + centre;
-      hi[k] = static_cast<long>(std::ceil(o.bbox->max[k] / res - 1e-9)) + centre;
+      // In tree voxels, still as doubles: a box of 1e300 m would overflow the conversion to an
+      // integer key (undefined; it gave a one-voxel map at -7e17 m). The count is bounded as
+      // frame_for_box bounds it for point clouds, and a corner beyond 2^50 tree voxels from the
+      // origin is refused too, so every key below is exact in a long.
+      const double a = std::floor(o.bbox->min[k] / res + 1e-9), b = std::ceil(o.bbox->max[k] / res - 1e-9);
+      if (!(b - a <= double(kMaxVoxels) * double(f)))
+        throw Error(Status::bad_dims, "bounding box needs too many voxels of " + std::to_string(res * double(f)) + " m");
+      constexpr double kFar = 1125899906842624.0;  // 2^50
+      if (!(std::fabs(a) <= kFar && std::fabs(b) <= kFar))
+        throw Error(Status::bad_dims, "bounding box axis " + std::string(1, "xyz"[k]) +
+                                          " lies more than 2^50 voxels of " + std::to_string(res) + " m from the origin");
+      lo[k] = static_cast<long>(a) + centre;
+      hi[k] = static_cast<long>(b) + centre;
       hi[k] = std::max(hi[k], lo[k] + 1);
     }
   } else {

@@ -1,12 +1,11 @@
 // OctoMap scan graphs (.graph). The binary layout is checked here before octomap::ScanGraph
 // reads it, since its reader trusts the counts in the file (a corrupt count means a huge
 // allocation or a read past the end).
-#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <fstream>
-#include <iterator>
+#include <istream>
+#include <limits>
 #include <string>
 
 #include "occseg/error.hpp"
@@ -39,6 +38,9 @@ struct GraphChecker {
     pos += 4;
     return v;
   }
+  // OctoMap stores doubles and reads them into floats (Vector3/Quaternion::readBinary): a finite
+  // value beyond the float range would be an undefined conversion there, so it is refused; NaN
+  // and infinite points stay what they are (holes), poses must be finite.
   void vec(std::uint32_t tag, bool finite, const char* what) {
     if (u32(what) != tag) bad(path, std::string("bad ") + what + " at byte " + std::to_string(pos - 4));
     need(8 * tag, what);
@@ -46,6 +48,8 @@ struct GraphChecker {
       double v;
       std::memcpy(&v, b.data() + pos + 8 * k, 8);
       if (finite && !std::isfinite(v)) bad(path, std::string(what) + " at byte " + std::to_string(pos) + " is not finite");
+      if (std::isfinite(v) && std::fabs(v) > double(std::numeric_limits<float>::max()))
+        bad(path, std::string(what) + " at byte " + std::to_string(pos) + " is beyond the range of a float");
     }
     pos += 8 * tag;
   }
@@ -116,15 +120,26 @@ Grid integrate_scan_graph(const octomap::ScanGraph& graph, const ScanOptions& op
 
 Grid read_scan_graph(const std::string& path, const ScanOptions& options) {
   options.validate();
-  std::string bytes = read_file(path);
+  const std::string bytes = read_file(path);
   GraphChecker{bytes, path}.run();
-  bytes.clear();
-  bytes.shrink_to_fit();
+  // OctoMap reads the checked bytes, not the file a second time (which may have changed since).
+  // Node by node as ScanGraph::readBinary does (ScanNode::readBinary); the edges are left out,
+  // since the fusion uses the scans and their poses only.
   octomap::ScanGraph graph;
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(Status::io, "cannot open '" + path + "': " + std::strerror(errno));
-  graph.readBinary(in);
-  if (in.bad()) throw Error(Status::io, "cannot read '" + path + "'");
+  {
+    BytesBuf buf(bytes);
+    std::istream in(&buf);
+    std::uint32_t nodes = 0;
+    in.read(reinterpret_cast<char*>(&nodes), sizeof nodes);
+    for (std::uint32_t i = 0; i < nodes && in; ++i) {
+      octomap::ScanNode n;
+      n.readBinary(in);
+      if (!in) break;
+      graph.addNode(n.scan, n.pose);  // the graph takes the scan
+      n.scan = nullptr;
+    }
+    if (!in || graph.size() != nodes) bad(path, "OctoMap could not read the checked scans");
+  }
   try {
     return integrate_scan_graph(graph, options);
   } catch (const Error& e) {

@@ -5,10 +5,14 @@
 #include <pcl/exceptions.h>
 #include <pcl/io/pcd_io.h>
 
+#include <sys/mman.h>
+#include <unistd.h>
+
 #include <cctype>
 #include <cerrno>
 #include <cstring>
-#include <fstream>
+#include <istream>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -45,10 +49,9 @@ void check_xyz_fields(const std::string& path, const pcl::PCLPointCloud2& blob) 
 // PCL's reader trusts the header (a file without fields or sizes crashes it), so the header
 // is checked here first: consistent field lists, WIDTH x HEIGHT = POINTS, and enough bytes for
 // the binary encodings.
-void check_header(const std::string& path) {
-  check_readable(path);
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(Status::io, "cannot open '" + path + "': " + std::strerror(errno));
+void check_header(const std::string& path, const std::string& bytes) {
+  BytesBuf buf(bytes);
+  std::istream in(&buf);
   std::size_t nfields = 0, nsize = 0, ntype = 0, ncount = 0, point_bytes = 0, width = 0, height = 1, points = 0;
   std::vector<std::size_t> sizes, counts;
   bool have_width = false, have_points = false;
@@ -66,9 +69,11 @@ void check_header(const std::string& path) {
     if (!(ls >> key) || key[0] == '#') continue;
     std::vector<std::string> vals;
     while (ls >> v) vals.push_back(v);
+    // PCL holds WIDTH, HEIGHT, POINTS and COUNT in 32 bits: a larger value cannot be meant.
     auto number = [&](const std::string& t) -> std::size_t {
-      if (t.empty() || t.find_first_not_of("0123456789") != std::string::npos || t.size() > 12)
-        bad_file(path, key + " value '" + t + "' is not a count");
+      if (t.empty() || t.find_first_not_of("0123456789") != std::string::npos || t.size() > 10 ||
+          std::stoull(t) > 0xffffffffull)
+        bad_file(path, printable(key) + " value '" + printable(t) + "' is not a count (0 to 4294967295)");
       return std::stoull(t);
     };
     if (key == "FIELDS" || key == "COLUMNS") nfields = vals.size();
@@ -77,12 +82,12 @@ void check_header(const std::string& path) {
       for (const auto& t : vals) {
         sizes.push_back(number(t));
         if (sizes.back() != 1 && sizes.back() != 2 && sizes.back() != 4 && sizes.back() != 8)
-          bad_file(path, "field size " + t + " is not 1, 2, 4 or 8");
+          bad_file(path, "field size " + printable(t) + " is not 1, 2, 4 or 8");
       }
     } else if (key == "TYPE") {
       ntype = vals.size();
       for (const auto& t : vals)
-        if (t != "I" && t != "U" && t != "F") bad_file(path, "field type '" + t + "' is not I, U or F");
+        if (t != "I" && t != "U" && t != "F") bad_file(path, "field type '" + printable(t) + "' is not I, U or F");
     } else if (key == "COUNT") {
       ncount = vals.size();
       for (const auto& t : vals) counts.push_back(number(t));
@@ -92,7 +97,7 @@ void check_header(const std::string& path) {
     else if (key == "DATA" && vals.size() == 1) data = vals[0];
     else if (key != "VERSION" && key != "VIEWPOINT" && key != "WIDTH" && key != "HEIGHT" && key != "POINTS" &&
              key != "DATA")
-      bad_file(path, "header line " + std::to_string(lines + 1) + " ('" + line.substr(0, 40) +
+      bad_file(path, "header line " + std::to_string(lines + 1) + " ('" + printable(line, 40) +
                          "') is not a PCD header field");
   }
   if (data.empty()) bad_file(path, "the header has no DATA line");
@@ -121,30 +126,68 @@ void check_header(const std::string& path) {
   if (!have_width || !have_points || width * height != points)
     bad_file(path, "WIDTH x HEIGHT does not equal POINTS");
   for (std::size_t i = 0; i < nfields; ++i) point_bytes += sizes[i] * (ncount ? counts[i] : 1);
+  // Counts below 2^32 and sizes below 16 keep point_bytes exact; the product may still wrap.
+  std::size_t need = 0;
+  if (__builtin_mul_overflow(points, point_bytes, &need))
+    bad_file(path, std::to_string(points) + " points of " + std::to_string(point_bytes) + " bytes overflow a size");
   if (data == "ascii") return;
-  if (data != "binary" && data != "binary_compressed") bad_file(path, "DATA '" + data + "' is not ascii, binary or binary_compressed");
+  if (data != "binary" && data != "binary_compressed") bad_file(path, "DATA '" + printable(data) + "' is not ascii, binary or binary_compressed");
   const std::streamoff body = static_cast<std::streamoff>(in.tellg());
   in.seekg(0, std::ios::end);
   const std::size_t left = static_cast<std::size_t>(static_cast<std::streamoff>(in.tellg()) - body);
   if (data == "binary") {
-    if (left < points * point_bytes) bad_file(path, "truncated: " + std::to_string(points) + " points need " +
-                                                       std::to_string(points * point_bytes) + " bytes, the file has " +
-                                                       std::to_string(left));
+    if (left < need) bad_file(path, "truncated: " + std::to_string(points) + " points need " + std::to_string(need) +
+                                     " bytes, the file has " + std::to_string(left));
     return;
   }
   std::uint32_t sz[2] = {0, 0};  // compressed and uncompressed sizes
   in.seekg(body);
   if (left < 8 || !in.read(reinterpret_cast<char*>(sz), 8)) bad_file(path, "truncated compressed data");
-  if (sz[1] != points * point_bytes) bad_file(path, "compressed data does not hold POINTS points");
+  if (sz[1] != need) bad_file(path, "compressed data does not hold POINTS points");
   if (left - 8 < sz[0]) bad_file(path, "truncated: compressed data needs " + std::to_string(sz[0]) + " bytes, the file has " +
                                            std::to_string(left - 8));
 }
+
+
+// PCL reads from a path. It is given a private in-memory copy of the checked bytes (a memfd,
+// opened as /proc/self/fd/N), so it parses exactly what was checked: reading the path a second
+// time would read whatever the file holds by then. Where memfd or /proc is missing, the path.
+class CheckedCopy {
+ public:
+  CheckedCopy(const std::string& bytes, const std::string& path) : path_(path) {
+    fd_ = ::memfd_create("occseg-pcd", MFD_CLOEXEC);
+    if (fd_ < 0) return;
+    for (std::size_t done = 0; done < bytes.size();) {
+      const ssize_t n = ::write(fd_, bytes.data() + done, bytes.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) throw Error(Status::no_memory, "'" + path + "': no memory for a private copy of the file");
+      done += static_cast<std::size_t>(n);
+    }
+    const std::string proc = "/proc/self/fd/" + std::to_string(fd_);
+    if (::access(proc.c_str(), R_OK) == 0) path_ = proc;
+  }
+  ~CheckedCopy() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  CheckedCopy(const CheckedCopy&) = delete;
+  CheckedCopy& operator=(const CheckedCopy&) = delete;
+  const std::string& path() const { return path_; }
+
+ private:
+  int fd_ = -1;
+  std::string path_;
+};
 
 }  // namespace
 
 Grid read_pcd(const std::string& path, const ScanOptions& options) {
   options.validate();
-  check_header(path);
+  std::optional<CheckedCopy> copy;
+  {
+    const std::string bytes = read_file(path);
+    check_header(path, bytes);
+    copy.emplace(bytes, path);
+  }  // the bytes are freed before PCL allocates its own
   pcl::PCLPointCloud2 blob;
   Eigen::Vector4f origin = Eigen::Vector4f::Zero();
   Eigen::Quaternionf orientation = Eigen::Quaternionf::Identity();
@@ -152,15 +195,15 @@ Grid read_pcd(const std::string& path, const ScanOptions& options) {
   int rc = 0;
   try {
     pcl::PCDReader reader;
-    rc = reader.read(path, blob, origin, orientation, version, 0);
+    rc = reader.read(copy->path(), blob, origin, orientation, version, 0);
   } catch (const pcl::PCLException& e) {
-    bad_file(path, e.detailedMessage());
+    bad_file(path, printable(e.detailedMessage(), 200));
   } catch (const std::bad_alloc&) {
     bad_file(path, "header claims more data than memory holds");
   } catch (const std::exception& e) {
     // PCL's header parser indexes its token vectors with at(): a malformed line that our header
     // check lets through surfaces as std::out_of_range (found by fuzz_pcd). It is the file's fault.
-    bad_file(path, std::string("PCL's reader rejected it: ") + e.what());
+    bad_file(path, "PCL's reader rejected it: " + printable(e.what(), 200));
   }
   if (rc < 0) bad_file(path, "PCL's reader failed (code " + std::to_string(rc) + "; see its message above)");
   check_xyz_fields(path, blob);

@@ -117,8 +117,10 @@ void insert_points(OccupancyFusion& fusion, const Eigen::Isometry3f& pose, const
 }
 
 Eigen::Isometry3f make_pose(const Vec3& origin, const std::array<double, 4>& q) {
+  // The pose is held in floats: converting a finite double beyond their range is undefined.
   for (double v : origin)
-    if (!std::isfinite(v)) throw Error(Status::bad_value, "sensor origin is not finite");
+    if (!std::isfinite(v) || std::fabs(v) > double(std::numeric_limits<float>::max()))
+      throw Error(Status::bad_value, "sensor origin is not finite in single precision");
   double n2 = 0;
   for (double v : q) {
     if (!std::isfinite(v)) throw Error(Status::bad_value, "sensor orientation is not finite");

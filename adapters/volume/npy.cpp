@@ -26,16 +26,161 @@ std::size_t item_size(const std::string& d) {
   return 0;
 }
 
-// Value of a key in the header dict, as the raw text after "'key':".
-std::string field(const std::string& h, const std::string& key, const std::string& name) {
-  const std::size_t k = h.find("'" + key + "'");
-  if (k == std::string::npos) fail(name, "header has no '" + key + "'");
-  std::size_t c = h.find(':', k);
-  if (c == std::string::npos) fail(name, "header entry '" + key + "' has no value");
-  ++c;
-  while (c < h.size() && h[c] == ' ') ++c;
-  return h.substr(c);
-}
+// The header dict, parsed as NumPy's reader parses it (numpy/lib/format.py: ast.literal_eval of
+// the header text, then exactly the keys descr, fortran_order and shape): a Python dict literal of
+// single- or double-quoted strings, True/False, non-negative decimal integers and tuples. A text
+// search for "'shape'" once read files NumPy refuses or reads otherwise: a repeated key (Python
+// keeps the last, the search found the first), a key inside a string value, "(3)" (an int, not a
+// tuple). What literal_eval would accept but no NumPy writer produces (escapes, string prefixes,
+// hexadecimal, nested parentheses) is refused too, with a message; nothing is read differently.
+class HeaderParser {
+ public:
+  HeaderParser(const std::string& text, const std::string& name, bool python2_longs)
+      : t_(text), name_(name), longs_(python2_longs) {}
+
+  void parse(NpyArray& a) {
+    skip();
+    expect('{', "the header is not a Python dict");
+    bool seen[3] = {false, false, false};
+    static const char* const keys[3] = {"descr", "fortran_order", "shape"};
+    skip();
+    while (peek() != '}') {
+      const std::string key = string_literal("a dict key");
+      int k = 0;
+      while (k < 3 && key != keys[k]) ++k;
+      if (k == 3) fail("header key '" + printable(key) + "' is not one of descr, fortran_order, shape");
+      if (seen[k]) fail("header key '" + key + "' appears twice");
+      seen[k] = true;
+      skip();
+      expect(':', "a dict key is not followed by ':'");
+      skip();
+      if (k == 0) a.descr = string_literal("the value of 'descr'");
+      else if (k == 1) a.fortran_order = boolean();
+      else a.shape = tuple();
+      skip();
+      if (peek() == ',') {
+        ++i_;
+        skip();
+      } else if (peek() != '}') {
+        fail("dict entries are not separated by ','");
+      }
+    }
+    ++i_;
+    skip();
+    if (i_ != t_.size()) {
+      const std::string rest = t_.substr(i_, t_.find_last_not_of(" \t\r\n\f") + 1 - i_);
+      fail("the header has text after its dict: '" + printable(rest, 20) + "'");
+    }
+    for (int k = 0; k < 3; ++k)
+      if (!seen[k]) fail(std::string("header has no '") + keys[k] + "'");
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& why) const { occseg::fail(name_, why); }
+
+  int peek() const { return i_ < t_.size() ? static_cast<unsigned char>(t_[i_]) : -1; }
+
+  void expect(char c, const char* why) {
+    if (peek() != static_cast<unsigned char>(c)) fail(why);
+    ++i_;
+  }
+
+  // Whitespace and comments, as Python's tokenizer skips them inside brackets.
+  void skip() {
+    while (i_ < t_.size()) {
+      const char c = t_[i_];
+      if (c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f') {
+        ++i_;
+      } else if (c == '#') {
+        while (i_ < t_.size() && t_[i_] != '\n' && t_[i_] != '\r') ++i_;
+      } else {
+        break;
+      }
+    }
+  }
+
+  static bool name_char(int c) { return c == '_' || (c >= '0' && c <= '9') || ((c | 0x20) >= 'a' && (c | 0x20) <= 'z'); }
+
+  std::string string_literal(const char* what) {
+    const int q = peek();
+    if (q != '\'' && q != '"') {
+      if (name_char(q) && i_ + 1 < t_.size() && (t_[i_ + 1] == '\'' || t_[i_ + 1] == '"'))
+        fail(std::string(what) + " has a string prefix (only plain '...' strings are read)");
+      fail(std::string(what) + " is not a quoted string");
+    }
+    if (t_.compare(i_, 3, std::string(3, static_cast<char>(q))) == 0)
+      fail(std::string(what) + " is a triple-quoted string (only plain '...' strings are read)");
+    const std::size_t start = ++i_;
+    while (i_ < t_.size() && t_[i_] != q) {
+      if (t_[i_] == '\\') fail(std::string(what) + " has an escape sequence (not read)");
+      if (t_[i_] == '\n' || t_[i_] == '\r') fail(std::string(what) + " is an unterminated string");
+      ++i_;
+    }
+    if (i_ == t_.size()) fail(std::string(what) + " is an unterminated string");
+    const std::string v = t_.substr(start, i_ - start);
+    ++i_;
+    skip();
+    if (peek() == '\'' || peek() == '"') fail(std::string(what) + " is two adjacent strings (not read)");
+    return v;
+  }
+
+  bool boolean() {
+    for (const char* w : {"True", "False"}) {
+      const std::size_t n = std::strlen(w);
+      if (t_.compare(i_, n, w) == 0 && !name_char(i_ + n < t_.size() ? static_cast<unsigned char>(t_[i_ + n]) : -1)) {
+        i_ += n;
+        return w[0] == 'T';
+      }
+    }
+    fail("the value of 'fortran_order' is not True or False");
+  }
+
+  std::size_t integer() {
+    const int c = peek();
+    if (c == '-') fail("a 'shape' entry is negative");
+    if (c < '0' || c > '9') fail("the value of 'shape' is not a tuple of integers");
+    const std::size_t start = i_;
+    std::size_t v = 0;
+    while (peek() >= '0' && peek() <= '9') {
+      if (v > kMaxVoxels) fail("shape entry is absurdly large");
+      v = v * 10 + std::size_t(t_[i_] - '0');
+      ++i_;
+    }
+    // Python 3 has no leading zeros ("007" is a syntax error; "00" is 0).
+    if (t_[start] == '0' && t_.find_first_not_of('0', start) < i_) fail("a 'shape' entry has a leading zero");
+    if (longs_ && peek() == 'L') ++i_;  // Python 2's long suffix, which NumPy drops for versions 1 and 2
+    if (name_char(peek()) || peek() == '.')
+      fail("a 'shape' entry is not a plain decimal integer");
+    return v;
+  }
+
+  std::vector<std::size_t> tuple() {
+    expect('(', "the value of 'shape' is not a tuple");
+    std::vector<std::size_t> v;
+    bool trailing_comma = false;
+    skip();
+    while (peek() != ')') {
+      v.push_back(integer());
+      skip();
+      trailing_comma = peek() == ',';
+      if (trailing_comma) {
+        ++i_;
+        skip();
+      } else if (peek() != ')') {
+        fail("the entries of 'shape' are not separated by ','");
+      }
+    }
+    ++i_;
+    // "(3)" is the integer 3 in Python: NumPy refuses it as a shape.
+    if (v.size() == 1 && !trailing_comma) fail("the value of 'shape' is an integer in parentheses, not a tuple");
+    return v;
+  }
+
+  const std::string& t_;
+  const std::string& name_;
+  const bool longs_;
+  std::size_t i_ = 0;
+};
 
 }  // namespace
 
@@ -63,33 +208,11 @@ NpyArray parse_npy(const unsigned char* b, std::size_t size, const std::string& 
   if (hlen > size - off) fail(name, "truncated header");
   const std::string h(reinterpret_cast<const char*>(b + off), hlen);
   NpyArray a;
-  std::string d = field(h, "descr", name);
-  if (d.size() < 2 || d[0] != '\'') fail(name, "malformed 'descr'");
-  const std::size_t q = d.find('\'', 1);
-  if (q == std::string::npos) fail(name, "malformed 'descr'");
-  a.descr = d.substr(1, q - 1);
+  HeaderParser(h, name, major <= 2).parse(a);
   const std::size_t isz = item_size(a.descr);
-  if (!isz) fail(name, "dtype '" + a.descr + "' is not supported (use float32, float64, uint8 or uint16)");
-  const std::string f = field(h, "fortran_order", name);
-  if (f.rfind("True", 0) == 0) a.fortran_order = true;
-  else if (f.rfind("False", 0) == 0) a.fortran_order = false;
-  else fail(name, "malformed 'fortran_order'");
-  const std::string s = field(h, "shape", name);
-  if (s.empty() || s[0] != '(') fail(name, "malformed 'shape'");
-  const std::size_t close = s.find(')');
-  if (close == std::string::npos) fail(name, "malformed 'shape'");
+  if (!isz) fail(name, "dtype '" + printable(a.descr) + "' is not supported (use float32, float64, uint8 or uint16)");
   std::size_t count = 1;
-  for (std::size_t i = 1; i < close;) {
-    while (i < close && (s[i] == ' ' || s[i] == ',')) ++i;
-    if (i >= close) break;
-    if (s[i] < '0' || s[i] > '9') fail(name, "malformed 'shape'");
-    std::size_t v = 0;
-    while (i < close && s[i] >= '0' && s[i] <= '9') {
-      if (v > kMaxVoxels) fail(name, "shape entry is absurdly large");
-      v = v * 10 + std::size_t(s[i] - '0');
-      ++i;
-    }
-    a.shape.push_back(v);
+  for (const std::size_t v : a.shape) {
     if (v != 0 && count > kMaxVoxels / v) fail(name, "shape claims more than 2^40 elements");
     count *= v;
   }

@@ -91,6 +91,79 @@ std::vector<std::string> split_vectors(const std::string& s) {
   return out;
 }
 
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+  return s;
+}
+
+// Teem's field identifiers and their spellings (nrrd/enumsNrrd.c, _nrrdFieldStrEqv), matched as
+// teem's airEnumVal matches them: the whole text before ": ", case-insensitively. Returns the
+// canonical name, or nullptr for a text that is no field.
+const char* canonical_field(const std::string& text) {
+  static const char* const eqv[][2] = {
+      {"content", "content"}, {"number", "number"}, {"type", "type"}, {"block size", "block size"},
+      {"blocksize", "block size"}, {"dimension", "dimension"}, {"space", "space"},
+      {"space dimension", "space dimension"}, {"spacedimension", "space dimension"}, {"sizes", "sizes"},
+      {"spacings", "spacings"}, {"thicknesses", "thicknesses"}, {"axis mins", "axis mins"}, {"axismins", "axis mins"},
+      {"axis maxs", "axis maxs"}, {"axismaxs", "axis maxs"}, {"space directions", "space directions"},
+      {"spacedirections", "space directions"}, {"centers", "centers"}, {"centerings", "centers"}, {"kinds", "kinds"},
+      {"labels", "labels"}, {"units", "units"}, {"min", "min"}, {"max", "max"}, {"old min", "old min"},
+      {"oldmin", "old min"}, {"old max", "old max"}, {"oldmax", "old max"}, {"endian", "endian"},
+      {"encoding", "encoding"}, {"line skip", "line skip"}, {"lineskip", "line skip"}, {"byte skip", "byte skip"},
+      {"byteskip", "byte skip"}, {"sample units", "sample units"}, {"sampleunits", "sample units"},
+      {"space units", "space units"}, {"spaceunits", "space units"}, {"space origin", "space origin"},
+      {"spaceorigin", "space origin"}, {"measurement frame", "measurement frame"},
+      {"measurementframe", "measurement frame"}, {"data file", "data file"}, {"datafile", "data file"}};
+  const std::string l = lower(text);
+  for (const auto& e : eqv)
+    if (l == e[0]) return e[1];
+  return nullptr;
+}
+
+// Teem's space names and spellings (_nrrdSpaceStrEqv), case-insensitive: the canonical name and
+// the space's dimension.
+bool canonical_space(const std::string& text, std::string& name, int& dim) {
+  static const struct { const char* spelling; const char* name; int dim; } eqv[] = {
+      {"right-anterior-superior", "right-anterior-superior", 3}, {"right anterior superior", "right-anterior-superior", 3},
+      {"rightanteriorsuperior", "right-anterior-superior", 3}, {"ras", "right-anterior-superior", 3},
+      {"left-anterior-superior", "left-anterior-superior", 3}, {"left anterior superior", "left-anterior-superior", 3},
+      {"leftanteriorsuperior", "left-anterior-superior", 3}, {"las", "left-anterior-superior", 3},
+      {"left-posterior-superior", "left-posterior-superior", 3}, {"left posterior superior", "left-posterior-superior", 3},
+      {"leftposteriorsuperior", "left-posterior-superior", 3}, {"lps", "left-posterior-superior", 3},
+      {"right-anterior-superior-time", "right-anterior-superior-time", 4},
+      {"right anterior superior time", "right-anterior-superior-time", 4},
+      {"rightanteriorsuperiortime", "right-anterior-superior-time", 4}, {"rast", "right-anterior-superior-time", 4},
+      {"left-anterior-superior-time", "left-anterior-superior-time", 4},
+      {"left anterior superior time", "left-anterior-superior-time", 4},
+      {"leftanteriorsuperiortime", "left-anterior-superior-time", 4}, {"last", "left-anterior-superior-time", 4},
+      {"left-posterior-superior-time", "left-posterior-superior-time", 4},
+      {"left posterior superior time", "left-posterior-superior-time", 4},
+      {"leftposteriorsuperiortime", "left-posterior-superior-time", 4}, {"lpst", "left-posterior-superior-time", 4},
+      {"scanner-xyz", "scanner-xyz", 3}, {"scanner-xyz-time", "scanner-xyz-time", 4}, {"scanner-xyzt", "scanner-xyz-time", 4},
+      {"3d-right-handed", "3D-right-handed", 3}, {"3d right handed", "3D-right-handed", 3},
+      {"3drighthanded", "3D-right-handed", 3}, {"3d-left-handed", "3D-left-handed", 3},
+      {"3d left handed", "3D-left-handed", 3}, {"3dlefthanded", "3D-left-handed", 3},
+      {"3d-right-handed-time", "3D-right-handed-time", 4}, {"3d right handed time", "3D-right-handed-time", 4},
+      {"3drighthandedtime", "3D-right-handed-time", 4}, {"3d-left-handed-time", "3D-left-handed-time", 4},
+      {"3d left handed time", "3D-left-handed-time", 4}, {"3dlefthandedtime", "3D-left-handed-time", 4}};
+  const std::string l = lower(text);
+  for (const auto& e : eqv)
+    if (l == e.spelling) {
+      name = e.name;
+      dim = e.dim;
+      return true;
+    }
+  return false;
+}
+
+// A non-negative decimal integer filling the whole text (no sign, no overflow: atoi's undefined
+// behaviour on "99999999999999999999" is not an option).
+bool parse_count(const std::string& t, std::size_t& out) {
+  if (t.empty() || t.size() > 15 || t.find_first_not_of("0123456789") != std::string::npos) return false;
+  out = std::stoull(t);
+  return true;
+}
+
 void swap_bytes(std::vector<unsigned char>& d, std::size_t size) {
   for (std::size_t i = 0; i + size <= d.size(); i += size) std::reverse(d.begin() + i, d.begin() + i + size);
 }
@@ -128,10 +201,18 @@ NrrdVolume read_nrrd(const std::string& path) {
   if (b.compare(0, 4, "NRRD") != 0) bad(path, "it does not start with NRRD");
   NrrdVolume v;
   bool have_type = false, have_sizes = false, big = false, ascii = false, have_endian = false;
-  int dimension = 0;
+  int dimension = 0, space_dim = 0;
   std::vector<std::size_t> sizes;
+  std::vector<std::string> seen;  // canonical names of the fields read so far
   std::size_t pos = b.find('\n');
   if (pos == std::string::npos) bad(path, "the header is truncated");
+  {
+    std::string magic = b.substr(0, pos);
+    if (!magic.empty() && magic.back() == '\r') magic.pop_back();
+    if (magic != "NRRD0001" && magic != "NRRD0002" && magic != "NRRD0003" && magic != "NRRD0004" &&
+        magic != "NRRD0005" && magic != "NRRD00.01")
+      bad(path, "the first line '" + printable(magic) + "' is not a NRRD magic (NRRD0001 to NRRD0005)");
+  }
   ++pos;
   for (;;) {
     const std::size_t e = b.find('\n', pos);
@@ -141,48 +222,92 @@ NrrdVolume read_nrrd(const std::string& path) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.empty()) break;  // data follows
     if (line[0] == '#') continue;
-    if (line.find(":=") != std::string::npos) continue;  // key/value pairs carry no geometry
+    // As teem (_nrrdReadNrrdParseField): the text before the first ": " names a field when it is
+    // one (any case); otherwise a line holding ":=" is a key/value pair (no geometry), and any
+    // other line is an error. A field may appear once.
     const std::size_t c = line.find(": ");
-    if (c == std::string::npos) bad(path, "header line '" + line + "' is not 'field: value'");
-    const std::string field = line.substr(0, c), value = trim(line.substr(c + 2));
+    const char* known = c == std::string::npos ? nullptr : canonical_field(line.substr(0, c));
+    if (!known) {
+      if (line.find(":=") != std::string::npos) continue;
+      if (c == std::string::npos) bad(path, "header line '" + printable(line) + "' is not 'field: value'");
+      bad(path, "header line '" + printable(line) + "': '" + printable(line.substr(0, c)) + "' is not a NRRD field");
+    }
+    const std::string field = known, value = trim(line.substr(c + 2));
+    if (std::find(seen.begin(), seen.end(), field) != seen.end()) bad(path, "the field '" + field + "' appears twice");
+    seen.push_back(field);
+    const std::string shown = printable(value);
+    // Teem reads the per-axis fields only once it knows the dimension, and vectors once it knows
+    // the space's dimension.
+    auto need_dimension = [&] {
+      if (!dimension) bad(path, "'" + field + "' comes before 'dimension'");
+    };
+    auto need_space = [&] {
+      if (!space_dim) bad(path, "'" + field + "' comes before 'space' or 'space dimension'");
+    };
     if (field == "type") {
-      have_type = parse_type(value, v.type);
-      if (!have_type) unsupported(path, "type '" + value + "' is not supported (uint8, uint16, uint32, int32, float, double)");
+      have_type = parse_type(lower(value), v.type);
+      if (!have_type) unsupported(path, "type '" + shown + "' is not supported (uint8, uint16, uint32, int32, float, double)");
     } else if (field == "dimension") {
-      dimension = std::atoi(value.c_str());
-      if (dimension != 2 && dimension != 3) unsupported(path, "dimension " + value + " (only 2 and 3)");
+      std::size_t d = 0;
+      if (!parse_count(value, d)) bad(path, "dimension '" + shown + "' is not a number");
+      if (d != 2 && d != 3) unsupported(path, "dimension " + shown + " (only 2 and 3)");
+      dimension = static_cast<int>(d);
+    } else if (field == "space") {
+      if (std::find(seen.begin(), seen.end(), "space dimension") != seen.end())
+        bad(path, "it has both 'space' and 'space dimension'");
+      if (!canonical_space(value, v.space, space_dim)) bad(path, "space '" + shown + "' is not a NRRD space");
+      if (space_dim != 3) unsupported(path, "space '" + shown + "' has a time axis (only 3D spaces are read)");
+    } else if (field == "space dimension") {
+      if (std::find(seen.begin(), seen.end(), "space") != seen.end())
+        bad(path, "it has both 'space' and 'space dimension'");
+      std::size_t d = 0;
+      if (!parse_count(value, d) || d < 2 || d > 3) unsupported(path, "space dimension '" + shown + "' (only 2 and 3)");
+      space_dim = static_cast<int>(d);
     } else if (field == "sizes") {
+      need_dimension();
       std::istringstream s(value);
-      std::size_t n;
+      std::string t;
       sizes.clear();
-      while (s >> n) sizes.push_back(n);
-      have_sizes = s.eof();
-      if (!have_sizes) bad(path, "malformed sizes '" + value + "'");
+      while (s >> t) {
+        std::size_t n = 0;
+        if (!parse_count(t, n)) bad(path, "malformed sizes '" + shown + "'");
+        sizes.push_back(n);
+      }
+      have_sizes = true;
     } else if (field == "encoding") {
-      std::string enc = value;
-      std::transform(enc.begin(), enc.end(), enc.begin(), [](unsigned char ch) { return std::tolower(ch); });
+      const std::string enc = lower(value);
       if (enc == "ascii" || enc == "text" || enc == "txt") ascii = true;
       else if (enc != "raw")
-        unsupported(path, "encoding '" + value + "' is not supported (raw, ascii); re-save with `unu save -e raw`");
+        unsupported(path, "encoding '" + shown + "' is not supported (raw, ascii); re-save with `unu save -e raw`");
     } else if (field == "endian") {
       have_endian = true;
-      if (value == "big") big = true;
-      else if (value != "little") bad(path, "endian '" + value + "'");
-    } else if (field == "data file" || field == "datafile") {
+      const std::string en = lower(value);
+      if (en == "big") big = true;
+      else if (en != "little") bad(path, "endian '" + shown + "'");
+    } else if (field == "data file") {
       unsupported(path, "detached data files are not supported");
-    } else if (field == "line skip" || field == "lineskip" || field == "byte skip" || field == "byteskip") {
-      if (std::atoi(value.c_str()) != 0) unsupported(path, field + " is not supported");
+    } else if (field == "line skip" || field == "byte skip") {
+      std::size_t n = 0;
+      if (!parse_count(value, n) || n != 0) unsupported(path, field + " " + shown + " is not supported");
+    } else if (field == "block size") {
+      unsupported(path, "block types are not supported");
     } else if (field == "space origin") {
+      need_space();
       std::vector<double> o;
-      if (!parse_vector(value, o) || o.size() < 2 || o.size() > 3) bad(path, "malformed space origin '" + value + "'");
+      if (!parse_vector(value, o) || o.size() != std::size_t(space_dim))
+        bad(path, "malformed space origin '" + shown + "'");
       for (std::size_t k = 0; k < o.size(); ++k) v.origin[k] = o[k];
     } else if (field == "space directions") {
+      need_dimension();
+      need_space();
       const std::vector<std::string> dirs = split_vectors(value);
+      if (dirs.size() != std::size_t(dimension)) bad(path, "malformed space directions '" + shown + "'");
       std::size_t axis = 0;
       for (const std::string& d : dirs) {
         if (d == "none") unsupported(path, "non-spatial axes are not supported");
         std::vector<double> dv;
-        if (!parse_vector(d, dv) || axis >= 3) bad(path, "malformed space directions '" + value + "'");
+        if (!parse_vector(d, dv) || dv.size() != std::size_t(space_dim))
+          bad(path, "malformed space directions '" + shown + "'");
         for (std::size_t k = 0; k < dv.size(); ++k)
           if (k != axis && dv[k] != 0) unsupported(path, "rotated axes (non-diagonal space directions) are not supported");
         if (!(axis < dv.size() && dv[axis] > 0)) unsupported(path, "flipped or zero space directions are not supported");
@@ -190,11 +315,17 @@ NrrdVolume read_nrrd(const std::string& path) {
         ++axis;
       }
     } else if (field == "spacings") {
+      need_dimension();
       std::istringstream s(value);
       for (std::size_t k = 0; k < 3 && s >> v.spacing[k]; ++k) {
       }
+    } else if (field == "kinds" || field == "centers" || field == "thicknesses" || field == "axis mins" ||
+               field == "axis maxs" || field == "labels" || field == "units") {
+      need_dimension();
+    } else if (field == "space units" || field == "measurement frame") {
+      need_space();
     }
-    // Other fields (space, kinds, labels, content, centers, ...) do not change the samples.
+    // The other fields (content, number, min, max, ...) do not change the samples.
   }
   if (!have_type) bad(path, "the header has no type");
   if (!dimension || !have_sizes || sizes.size() != std::size_t(dimension))
@@ -281,15 +412,19 @@ Grid grid_from_nrrd(const NrrdVolume& v, const std::string& name) {
 
 void write_nrrd(const std::string& path, NrrdType type, const Dims& dims, double voxel_size,
                 const std::array<double, 3>& corner, const void* data, std::size_t bytes, const std::string& content,
-                StagedFiles* into) {
+                const std::string& space, StagedFiles* into) {
   check_dims(dims);
   if (bytes != dims.count() * type_size(type))
     throw Error(Status::invalid_argument, "write_nrrd: " + std::to_string(bytes) + " bytes do not match the dims");
   if (!host_little_endian()) throw Error(Status::unsupported, "write_nrrd: big-endian hosts are not supported");
+  std::string space_name = kNrrdDefaultSpace;
+  int space_dim = 3;
+  if (!space.empty() && (!canonical_space(space, space_name, space_dim) || space_dim != 3))
+    throw Error(Status::invalid_argument, "write_nrrd: '" + printable(space) + "' is not a 3D NRRD space");
   std::ostringstream h;
   h << "NRRD0004\n# Complete NRRD file format specification at:\n# http://teem.sourceforge.net/nrrd/format.html\n";
   if (!content.empty()) h << "content: " << content << "\n";
-  h << "type: " << nrrd_type_name(type) << "\ndimension: 3\nspace: right-anterior-superior\n"
+  h << "type: " << nrrd_type_name(type) << "\ndimension: 3\nspace: " << space_name << "\n"
     << "sizes: " << dims.nx << " " << dims.ny << " " << dims.nz << "\n"
     << "space directions: (" << num(voxel_size) << ",0,0) (0," << num(voxel_size) << ",0) (0,0," << num(voxel_size)
     << ")\nkinds: domain domain domain\nendian: little\nencoding: raw\n"
@@ -302,16 +437,18 @@ void write_nrrd(const std::string& path, NrrdType type, const Dims& dims, double
   }, into);
 }
 
-void write_grid_nrrd(const std::string& path, const Grid& g, StagedFiles* into) {
+void write_grid_nrrd(const std::string& path, const Grid& g, const std::string& space, StagedFiles* into) {
   write_nrrd(path, NrrdType::f32, g.dims, g.voxel_size, g.origin, g.p.data(), g.p.size() * sizeof(float),
-             "occupancy probability", into);
+             "occupancy probability", space, into);
 }
 
-void write_labels_nrrd(const std::string& path, const Grid& g, const LabelArray& labels, StagedFiles* into) {
+void write_labels_nrrd(const std::string& path, const Grid& g, const LabelArray& labels, const std::string& space,
+                       StagedFiles* into) {
   if (labels.size() != g.dims.count())
     throw Error(Status::invalid_argument, "write_labels_nrrd: " + std::to_string(labels.size()) +
                                               " labels for " + std::to_string(g.dims.count()) + " voxels");
-  write_nrrd(path, NrrdType::u32, g.dims, g.voxel_size, g.origin, labels.data(), labels.size() * 4, "segment labels", into);
+  write_nrrd(path, NrrdType::u32, g.dims, g.voxel_size, g.origin, labels.data(), labels.size() * 4, "segment labels",
+             space, into);
 }
 
 }  // namespace occseg

@@ -113,9 +113,10 @@ class Map(Owned):
 
     def write(self, path, **options):
         """Writes the map with the library's writer for the path's extension (.npy: float32
-        [z, y, x]; .nrrd: with voxel size and origin; more from plugins); keywords become writer
-        options "key=value". All or nothing. A path, option name or text value holding a NUL
-        character raises OccsegValueError (C would see only the text before it)."""
+        [z, y, x]; .nrrd: with voxel size and origin, in the space of the .nrrd the map was read
+        from, else right-anterior-superior; more from plugins); keywords become writer options
+        "key=value". All or nothing. A path, option name or text value holding a NUL character
+        raises OccsegValueError (C would see only the text before it)."""
         p = path_bytes("occseg.Map.write", "path", path)
         if has("occseg_map_write_options"):
             opts = option_array("occseg_map_write", options)

@@ -75,7 +75,7 @@ m = np.full((20, 24, 28), 0.12, dtype=np.float32)
 m[4:10, 4:10, 4:10] = 0.97
 np.save(os.path.join(work, "map.npy"), m)
 lab_npy, _, _, _ = check("npy", [os.path.join(work, "map.npy"), "--voxel-size", "0.1"], grid=True)
-hdr = ("NRRD0004\ntype: float\ndimension: 3\nsizes: 28 24 20\nspace directions: (0.1,0,0) (0,0.1,0) "
+hdr = ("NRRD0004\ntype: float\ndimension: 3\nspace: right-anterior-superior\nsizes: 28 24 20\nspace directions: (0.1,0,0) (0,0.1,0) "
        "(0,0,0.1)\nendian: little\nencoding: raw\nspace origin: (1.05,2.05,3.05)\n\n")
 with open(os.path.join(work, "map.nrrd"), "wb") as f:
     f.write(hdr.encode() + m.tobytes())

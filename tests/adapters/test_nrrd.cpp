@@ -1,7 +1,10 @@
 // NRRD read/write and the .npy writers for every C ABI dtype.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstring>
+#include <utility>
+#include <vector>
 #include <filesystem>
 #include <fstream>
 
@@ -85,7 +88,7 @@ TEST(Nrrd, HandWrittenBigEndianAndAsciiFiles) {
   // ascii doubles, 2D, CRLF line ends, a comment and a key/value pair.
   const std::string a = tmp("ascii.nrrd");
   put(a, "NRRD0005\r\n# comment\r\ntype: double\r\ndimension: 2\r\nsizes: 3 1\r\nencoding: ascii\r\nkey:=value\r\n"
-         "space origin: (1,2)\r\n\r\n0.25 0.5\n0.75\n");
+         "space dimension: 2\r\nspace origin: (1,2)\r\n\r\n0.25 0.5\n0.75\n");
   const Grid h = grid_from_nrrd(read_nrrd(a), a);
   EXPECT_TRUE(h.dims == (Dims{3, 1, 1}));
   EXPECT_FLOAT_EQ(h.p[2], 0.75f);
@@ -107,7 +110,7 @@ TEST(Nrrd, BadFilesGiveStatusesNamingTheFile) {
   }
   put(f, hdr + "encoding: gzip\n\n");
   EXPECT_EQ(status_of([&] { read_nrrd(f); }), Status::unsupported);
-  put(f, hdr + "encoding: raw\nspace directions: (0,1,0) (1,0,0) (0,0,1)\n\n" + std::string(32, '\0'));
+  put(f, hdr + "encoding: raw\nspace: RAS\nspace directions: (0,1,0) (1,0,0) (0,0,1)\n\n" + std::string(32, '\0'));
   EXPECT_EQ(status_of([&] { read_nrrd(f); }), Status::unsupported) << "rotated axes";
   put(f, hdr + "encoding: raw\n" + std::string(32, '\0'));
   EXPECT_EQ(status_of([&] { read_nrrd(f); }), Status::format) << "no blank line";
@@ -119,6 +122,96 @@ TEST(Nrrd, BadFilesGiveStatusesNamingTheFile) {
   float two = 2.0f;
   put(f, hdr + "encoding: raw\n\n" + std::string(reinterpret_cast<char*>(&two), 4) + std::string(28, '\0'));
   EXPECT_EQ(status_of([&] { grid_from_nrrd(read_nrrd(f), f); }), Status::bad_value);
+}
+
+namespace {
+// Status and message of read_nrrd on a file holding `bytes`.
+std::pair<Status, std::string> read_status(const std::string& name, const std::string& bytes) {
+  const std::string f = tmp(name);
+  put(f, bytes);
+  try {
+    read_nrrd(f);
+  } catch (const Error& e) {
+    return {e.status(), e.what()};
+  }
+  return {Status::ok, ""};
+}
+}  // namespace
+
+TEST(Nrrd, FieldsAreMatchedAsTeemMatchesThem) {
+  const std::string data(8 * 4, '\0');
+  // Any case, teem's spellings: all of these are fields teem reads, and so does occseg.
+  const std::string shouted = "NRRD0004\nTYPE: FLOAT\nDimension: 3\nSPACE: RAS\nSizes: 2 2 2\n"
+                              "Space Directions: (0.5,0,0) (0,0.5,0) (0,0,0.5)\nENDIAN: LITTLE\nEncoding: RAW\n"
+                              "SpaceOrigin: (1,2,3)\n\n";
+  put(tmp("shouted.nrrd"), shouted + data);
+  const NrrdVolume v = read_nrrd(tmp("shouted.nrrd"));
+  EXPECT_EQ(v.type, NrrdType::f32);
+  EXPECT_EQ(v.spacing, (std::array<double, 3>{0.5, 0.5, 0.5})) << "Space Directions was read";
+  EXPECT_EQ(v.origin, (std::array<double, 3>{1, 2, 3})) << "SpaceOrigin was read";
+  EXPECT_EQ(v.space, "right-anterior-superior");
+  // "Data File:" names the data elsewhere: the bytes after the header are not the samples
+  // (occseg once skipped the field and read them).
+  const std::string hdr = "NRRD0004\ntype: float\ndimension: 3\nsizes: 2 2 2\nendian: little\nencoding: raw\n";
+  for (const char* line : {"Data File: other.raw\n", "DATAFILE: other.raw\n", "data file: x:=y\n"}) {
+    const auto r = read_status("detached.nrrd", hdr + line + "\n" + data);
+    EXPECT_EQ(r.first, Status::unsupported) << line << r.second;
+    EXPECT_NE(r.second.find("detached data files"), std::string::npos) << r.second;
+  }
+  // What teem refuses: a field twice, a line naming no field, per-axis fields before the
+  // dimension, vectors before the space, both kinds of space, a magic it does not know.
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {hdr + "sizes: 4 4 4\n", "the field 'sizes' appears twice"},
+      {hdr + "Encoding: ascii\n", "the field 'encoding' appears twice"},
+      {hdr + "colour: red\n", "'colour' is not a NRRD field"},
+      {hdr + "typo line\n", "is not 'field: value'"},
+      {"NRRD0004\ntype: float\nsizes: 2 2 2\ndimension: 3\nendian: little\nencoding: raw\n", "'sizes' comes before 'dimension'"},
+      {hdr + "space directions: (1,0,0) (0,1,0) (0,0,1)\n", "'space directions' comes before 'space'"},
+      {hdr + "space origin: (0,0,0)\n", "'space origin' comes before 'space'"},
+      {hdr + "space: LPS\nspace dimension: 3\n", "both 'space' and 'space dimension'"},
+      {hdr + "space: up-down-sideways\n", "is not a NRRD space"},
+      {hdr + "space: RAS\nspace origin: (0,0)\n", "malformed space origin"},
+      {"NRRD0009\ntype: float\ndimension: 3\nsizes: 2 2 2\nendian: little\nencoding: raw\n", "is not a NRRD magic"},
+      {"NRRD0004\ntype: float\ndimension: 99999999999999999999\n", "dimension '99999999999999999999' is not a number"},
+  };
+  for (const auto& c : refused) {
+    const auto r = read_status("refused.nrrd", c.first + "\n" + data);
+    EXPECT_EQ(r.first, Status::format) << c.first << r.second;
+    EXPECT_NE(r.second.find(c.second), std::string::npos) << c.first << r.second;
+  }
+  const auto skip = read_status("skip.nrrd", hdr + "byte skip: 99999999999999999999999\n\n" + data);
+  EXPECT_EQ(skip.first, Status::unsupported) << skip.second;
+  const auto time = read_status("time.nrrd", hdr + "space: RAST\n\n" + data);
+  EXPECT_EQ(time.first, Status::unsupported) << time.second;
+  // A line with both ": " and ":=" whose field part is no field is a key/value pair.
+  EXPECT_EQ(read_status("kv.nrrd", hdr + "my key: with colon:=value\n\n" + data).first, Status::ok);
+}
+
+TEST(Nrrd, TheFilesSpaceIsKeptAndWrittenBack) {
+  // 3D Slicer saves in left-posterior-superior: the grid is in LPS coordinates, and labels
+  // written with the volume's space lie on it. Written as RAS with the same numbers (as they
+  // once were) they came out mirrored in x and y.
+  const std::string f = tmp("lps.nrrd");
+  put(f, "NRRD0004\ntype: float\ndimension: 3\nspace: LPS\nsizes: 4 3 2\n"
+         "space directions: (0.5,0,0) (0,0.5,0) (0,0,0.5)\nendian: little\nencoding: raw\n"
+         "space origin: (10.25,-20.5,3)\n\n" + std::string(24 * 4, '\0'));
+  const NrrdVolume v = read_nrrd(f);
+  EXPECT_EQ(v.space, "left-posterior-superior");
+  const Grid g = grid_from_nrrd(v, f);
+  EXPECT_EQ(g.origin, (std::array<double, 3>{10.0, -20.75, 2.75}));
+  const LabelArray labels(g.p.size(), 7u);
+  const std::string out = tmp("lps_labels.nrrd");
+  write_labels_nrrd(out, g, labels, v.space);
+  const std::string text = slurp(out);
+  EXPECT_NE(text.find("\nspace: left-posterior-superior\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("\nspace directions: (0.5,0,0) (0,0.5,0) (0,0,0.5)\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("\nspace origin: (10.25,-20.5,3)\n"), std::string::npos) << text;
+  EXPECT_EQ(read_nrrd(out).space, "left-posterior-superior");
+  // No space given: RAS, as before. A name that is no 3D space is refused.
+  write_labels_nrrd(out, g, labels);
+  EXPECT_NE(slurp(out).find("\nspace: right-anterior-superior\n"), std::string::npos);
+  EXPECT_EQ(status_of([&] { write_labels_nrrd(out, g, labels, "RAST"); }), Status::invalid_argument);
+  EXPECT_EQ(status_of([&] { write_labels_nrrd(out, g, labels, "sideways"); }), Status::invalid_argument);
 }
 
 TEST(NpyWriters, EveryCAbiDtypeRoundTrips) {

@@ -247,3 +247,47 @@ TEST(OctomapFiles, BadFilesGiveStatusesNamingTheFile) {
   EXPECT_EQ(status_of([&] { read_scan_graph(g, o); }), Status::format);
   EXPECT_EQ(status_of([&] { read_scan_graph(tmp("missing.graph"), o); }), Status::io);
 }
+
+TEST(OctomapOt, StampedTreesAreReadLikeTheOtherTypes) {
+  // OcTreeStamped nodes are written as plain OcTreeNodes (log-odds only, no time stamp): the
+  // structure check once expected 8 bytes a node and refused every such file OctoMap wrote.
+  octomap::OcTreeStamped tree(0.1);
+  for (int i = -6; i <= 6; ++i) tree.updateNode(octomap::point3d(0.1f * i, 0.05f, 0.2f), float(0.3 * i));
+  tree.updateInnerOccupancy();
+  const std::string f = tmp("stamped.ot");
+  ASSERT_TRUE(tree.write(f));
+  std::string msg;
+  Grid g;
+  ASSERT_EQ(status_of([&] { g = read_octree_file(f); }, &msg), Status::ok) << msg;
+  const Grid m = grid_from_octree(tree);
+  EXPECT_TRUE(g.dims == m.dims);
+  EXPECT_EQ(g.p, m.p);
+}
+
+TEST(OctomapBt, HugeOrFarBoxesAndVoxelSizesAreRefusedBeforeAnyIntegerConversion) {
+  // A box of 1e300 m once overflowed the conversion to tree keys (undefined behaviour): a
+  // one-voxel map at -7e17 m and exit 0. The .pcd path already refused it (frame_for_box).
+  std::string msg;
+  OctreeOptions o;
+  o.bbox = Box{{-1e300, -1e300, -1e300}, {1e300, 1e300, 1e300}};
+  EXPECT_EQ(status_of([&] { read_octree_file(kBt, o); }, &msg), Status::bad_dims);
+  EXPECT_NE(msg.find("bounding box needs too many voxels of 0.08"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("geb079.bt"), std::string::npos) << msg;
+  o.bbox = Box{{1e300, 1e300, 1e300}, {1.0000001e300, 1.0000001e300, 1.0000001e300}};
+  EXPECT_EQ(status_of([&] { read_octree_file(kBt, o); }, &msg), Status::bad_dims);
+  o.bbox = Box{{1e17, 0, 0}, {1e17 + 1e3, 1, 1}};  // few voxels, but 10^18 keys from the origin
+  EXPECT_EQ(status_of([&] { read_octree_file(kBt, o); }, &msg), Status::bad_dims);
+  EXPECT_NE(msg.find("from the origin"), std::string::npos) << msg;
+  // A far box of a sane size still reads: all unknown.
+  o.bbox = Box{{1e6, 0, 0}, {1e6 + 0.8, 0.8, 0.8}};
+  Grid g;
+  ASSERT_EQ(status_of([&] { g = read_octree_file(kBt, o); }, &msg), Status::ok) << msg;
+  EXPECT_TRUE(g.dims == (Dims{10, 10, 10})) << g.dims.nx;
+  EXPECT_NEAR(g.origin[0], 1e6, 0.08);
+  for (float p : g.p) ASSERT_EQ(p, 0.5f);
+  // A voxel size whose ratio to the resolution does not fit an integer.
+  OctreeOptions v;
+  v.voxel_size = 1e300;
+  EXPECT_EQ(status_of([&] { read_octree_file(kBt, v); }, &msg), Status::invalid_argument);
+  EXPECT_NE(msg.find("multiple"), std::string::npos) << msg;
+}

@@ -54,6 +54,9 @@ TEST(ScanFrame, PoseTransformsPointsBeforeRayCasting) {
   EXPECT_NEAR(g.at(4, 2, 1), 0.4, 1e-6) << "the sensor voxel is passed through";
   EXPECT_THROW(make_pose({0, 0, 0}, {0, 0, 0, 0}), Error);
   EXPECT_THROW(make_pose({NAN, 0, 0}), Error);
+  // Beyond the float range the pose could not be held (an undefined conversion): refused.
+  EXPECT_THROW(make_pose({0, 1e300, 0}), Error);
+  EXPECT_THROW(make_pose({-1e39, 0, 0}), Error);
 }
 
 TEST(ScanFrame, OptionsAreValidated) {

@@ -1,4 +1,4 @@
-/* occseg_map_*: dtypes, value checks, accessors, .npy files, argument errors. */
+/* occseg_map_*: dtypes, value checks, accessors, .npy and .nrrd files, argument errors. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -206,6 +206,66 @@ static void npy_files(void **state) {
   occseg_map_free(m);
 }
 
+/* The whole text of a file (NUL-terminated; the caller frees it). */
+static char *slurp_text(const char *path) {
+  FILE *f = fopen(path, "rb");
+  char *b;
+  long n;
+  assert_non_null(f);
+  fseek(f, 0, SEEK_END);
+  n = ftell(f);
+  fseek(f, 0, SEEK_SET);
+  b = malloc((size_t)n + 1);
+  assert_non_null(b);
+  assert_int_equal(fread(b, 1, (size_t)n, f), (size_t)n);
+  b[n] = '\0';
+  fclose(f);
+  return b;
+}
+
+/* A map read from an LPS .nrrd (3D Slicer's default space) is written back in LPS with the same
+ * origin and directions: written as RAS with the same numbers it came out mirrored in x and y. */
+static void nrrd_files_keep_their_space(void **state) {
+  static const char header[] =
+      "NRRD0004\ntype: float\ndimension: 3\nSpace: LPS\nsizes: 4 3 2\n"
+      "space directions: (0.5,0,0) (0,0.5,0) (0,0,0.5)\nkinds: domain domain domain\nendian: little\n"
+      "encoding: raw\nspace origin: (10.25,-20.5,3)\n\n";
+  float p[24], out[24];
+  double origin[3];
+  occseg_map *m = NULL, *r = NULL;
+  char *text;
+  FILE *f;
+  int i;
+  (void)state;
+  for (i = 0; i < 24; ++i) p[i] = (float)i / 23.0f;
+  f = fopen("c_suite_lps.nrrd", "wb");
+  assert_non_null(f);
+  fputs(header, f);
+  fwrite(p, sizeof p[0], 24, f);
+  fclose(f);
+  assert_int_equal(occseg_map_read(&m, "c_suite_lps.nrrd"), OCCSEG_OK);
+  assert_int_equal(occseg_map_origin(m, origin), OCCSEG_OK); /* the corner, in LPS coordinates */
+  assert_true(origin[0] == 10.0 && origin[1] == -20.75 && origin[2] == 2.75);
+  assert_int_equal(occseg_map_write(m, "c_suite_lps_out.nrrd"), OCCSEG_OK);
+  text = slurp_text("c_suite_lps_out.nrrd");
+  assert_non_null(strstr(text, "\nspace: left-posterior-superior\n"));
+  assert_non_null(strstr(text, "\nspace directions: (0.5,0,0) (0,0.5,0) (0,0,0.5)\n"));
+  assert_non_null(strstr(text, "\nspace origin: (10.25,-20.5,3)\n"));
+  free(text);
+  assert_int_equal(occseg_map_read(&r, "c_suite_lps_out.nrrd"), OCCSEG_OK);
+  assert_int_equal(occseg_map_values(r, out, 24), OCCSEG_OK);
+  assert_memory_equal(out, p, sizeof p);
+  occseg_map_free(r);
+  occseg_map_free(m);
+  /* A map of no named space is written in RAS, occseg's world as 3D Slicer shows it. */
+  assert_int_equal(occseg_map_from_buffer(&m, p, OCCSEG_F32, (const size_t[3]){4, 3, 2}, NULL, 0.5), OCCSEG_OK);
+  assert_int_equal(occseg_map_write(m, "c_suite_ras.nrrd"), OCCSEG_OK);
+  text = slurp_text("c_suite_ras.nrrd");
+  assert_non_null(strstr(text, "\nspace: right-anterior-superior\n"));
+  free(text);
+  occseg_map_free(m);
+}
+
 int run_map_tests(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(dtypes_map_onto_probabilities),
@@ -214,6 +274,7 @@ int run_map_tests(void) {
       cmocka_unit_test(out_of_memory_is_reported),
       cmocka_unit_test(bad_values_name_the_first_voxel),
       cmocka_unit_test(npy_files),
+      cmocka_unit_test(nrrd_files_keep_their_space),
   };
   return cmocka_run_group_tests_name("map", tests, NULL, NULL);
 }

@@ -67,10 +67,12 @@ int run(const SegmentArgs& o) {
   std::vector<std::pair<std::string, std::function<void(const std::string&, StagedFiles&)>>> files;
   files.emplace_back("labels.npy",
                      [&](const std::string& f, StagedFiles& s) { write_labels_npy(f, r.dims, r.labels, &s); });
-  files.emplace_back("labels.nrrd",
-                     [&](const std::string& f, StagedFiles& s) { write_labels_nrrd(f, grid, r.labels, &s); });
+  // In the input's space (an LPS volume's labels in LPS, lying on it in 3D Slicer).
+  files.emplace_back("labels.nrrd", [&](const std::string& f, StagedFiles& s) {
+    write_labels_nrrd(f, grid, r.labels, input.nrrd_space, &s);
+  });
   if (input.kind != InputKind::volume)
-    files.emplace_back("map.nrrd", [&](const std::string& f, StagedFiles& s) { write_grid_nrrd(f, grid, &s); });
+    files.emplace_back("map.nrrd", [&](const std::string& f, StagedFiles& s) { write_grid_nrrd(f, grid, "", &s); });
   if (input.kind == InputKind::cloud && have_pcl())
     files.emplace_back("segments.pcd",
                        [&](const std::string& f, StagedFiles& s) { write_cloud_output(f, grid, r, &s); });

@@ -123,7 +123,9 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
     } else {
       const NrrdVolume v = read_nrrd(path);
       in.format = std::string("NRRD, ") + nrrd_type_name(v.type);
+      if (!v.space.empty() && v.space != kNrrdDefaultSpace) in.format += ", " + v.space + " coordinates";
       in.grid = grid_from_nrrd(v, path);
+      in.nrrd_space = v.space;
       if (o.voxel_size) {  // the file's spacing, overridden; keep the first voxel centre in place
         for (double& c : in.grid.origin) c += (in.grid.voxel_size - *o.voxel_size) / 2;
         in.grid.voxel_size = *o.voxel_size;

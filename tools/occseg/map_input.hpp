@@ -30,6 +30,9 @@ struct MapInput {
   Grid grid;
   InputKind kind = InputKind::volume;
   std::string format;  // for people: "NumPy .npy, float32, C order", "PCL point cloud (.pcd), 209280 ..."
+  // The named space of a .nrrd input (teem's name, e.g. "left-posterior-superior"): the grid is
+  // in its coordinates, and labels.nrrd is written in it. Empty for every other input.
+  std::string nrrd_space;
 };
 
 // Reads .npy, .nrrd, .pcd, .graph, .bt or .ot (case-insensitive extension). Throws

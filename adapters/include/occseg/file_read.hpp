@@ -1,7 +1,11 @@
 // Reading whole input files, with errors that name the file and the problem (missing, not
 // permitted, a directory, an I/O error) rather than a stream exception or an empty read.
 #pragma once
+#include <cstddef>
+#include <ios>
+#include <streambuf>
 #include <string>
+#include <string_view>
 
 namespace occseg {
 
@@ -12,5 +16,36 @@ std::string read_file(const std::string& path);
 // Throws the same errors when `path` cannot be opened for reading or is a directory, for
 // readers that hand the path on to a library (PCL, OctoMap).
 void check_readable(const std::string& path);
+
+// File content as it may appear in a message: printable ASCII is kept, a backslash is doubled,
+// and every other byte (control characters, terminal escape sequences, bytes >= 0x80) becomes
+// \xNN; at most `max_bytes` bytes of `text` are shown, and "..." marks a cut. Every reader that
+// quotes bytes of its file in an error goes through this, so no message carries the file's
+// control sequences to a terminal or a log.
+std::string printable(std::string_view text, std::size_t max_bytes = 64);
+
+// A read-only, seekable stream buffer over bytes held elsewhere (they must outlive it), so that
+// a file read once can be parsed with std::istream without a copy. A reader checks the bytes
+// and hands the library these same bytes, never the path a second time (the file may change).
+class BytesBuf : public std::streambuf {
+ public:
+  explicit BytesBuf(std::string_view bytes) {
+    char* p = const_cast<char*>(bytes.data());  // the get area is only read
+    setg(p, p, p + bytes.size());
+  }
+
+ protected:
+  pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode which) override {
+    if (!(which & std::ios_base::in)) return pos_type(off_type(-1));
+    const off_type base = dir == std::ios_base::beg ? 0 : dir == std::ios_base::cur ? gptr() - eback() : egptr() - eback();
+    const off_type to = base + off;
+    if (to < 0 || to > egptr() - eback()) return pos_type(off_type(-1));
+    setg(eback(), eback() + to, egptr());
+    return pos_type(to);
+  }
+  pos_type seekpos(pos_type pos, std::ios_base::openmode which) override {
+    return seekoff(off_type(pos), std::ios_base::beg, which);
+  }
+};
 
 }  // namespace occseg

@@ -2,9 +2,18 @@
 // and ITK open occseg's maps and labels in their place in the world.
 //
 // Geometry: occseg's Grid::origin is the corner of voxel (0, 0, 0); NRRD's "space origin" is the
-// centre of the first sample. Files are written with `space: right-anterior-superior` (so Slicer
-// shows world x, y, z as R, A, S without mirroring), diagonal `space directions` of the voxel
-// size and `space origin` = origin + voxel_size / 2. Reading takes the numbers as they are.
+// centre of the first sample. Reading takes the numbers as they are, in the file's own space: a
+// file in `space: left-posterior-superior` (3D Slicer's and DICOM's) gives a grid in LPS
+// coordinates, and NrrdVolume::space says so. Files are written with diagonal `space directions`
+// of the voxel size, `space origin` = origin + voxel_size / 2 and the space they are given: the
+// space of the input they came from (labels of an LPS volume are written in LPS, so they lie on
+// the volume), or `right-anterior-superior` (world x, y, z shown as R, A, S, without mirroring)
+// for maps of no named space.
+//
+// The header is read as teem reads it: field names in any case and in teem's spellings
+// ("Data File", "spacedirections"), each field once, the per-axis fields after "dimension" and
+// the vectors after "space" or "space dimension"; a line that names no field is an error unless
+// it is a "key:=value" pair.
 #pragma once
 #include <array>
 #include <cstdint>
@@ -26,6 +35,7 @@ struct NrrdVolume {
   Dims dims;                                // sizes, x fastest (a 2D file has nz = 1)
   std::array<double, 3> spacing{1, 1, 1};   // from space directions or spacings; 1 when absent
   std::array<double, 3> origin{0, 0, 0};    // space origin (centre of the first sample)
+  std::string space;                        // teem's name of the file's 3D space ("" when none is named)
   std::vector<unsigned char> data;          // samples in host byte order, x fastest
 };
 
@@ -41,14 +51,20 @@ NrrdVolume read_nrrd(const std::string& path);
 // for values outside [0, 1].
 Grid grid_from_nrrd(const NrrdVolume& v, const std::string& name);
 
+// The space written when none is given: occseg's world x, y, z as 3D Slicer's R, A, S.
+inline const char* const kNrrdDefaultSpace = "right-anterior-superior";
+
 // Writes raw little-endian data with the grid geometry above, atomically (write_file_atomically),
-// or stages it `into` a set of files replaced together.
+// in `space` (a 3D space's name as teem spells it; empty: kNrrdDefaultSpace), or stages it
+// `into` a set of files replaced together. Throws Error(invalid_argument) for a name that is no
+// 3D NRRD space.
 void write_nrrd(const std::string& path, NrrdType type, const Dims& dims, double voxel_size,
                 const std::array<double, 3>& corner_origin, const void* data, std::size_t bytes,
-                const std::string& content = "", StagedFiles* into = nullptr);
-// A map as float, and a label volume (uint32, same geometry as `grid`).
-void write_grid_nrrd(const std::string& path, const Grid& grid, StagedFiles* into = nullptr);
+                const std::string& content = "", const std::string& space = "", StagedFiles* into = nullptr);
+// A map as float, and a label volume (uint32, same geometry as `grid`), in `space` as above.
+void write_grid_nrrd(const std::string& path, const Grid& grid, const std::string& space = "",
+                     StagedFiles* into = nullptr);
 void write_labels_nrrd(const std::string& path, const Grid& grid, const LabelArray& labels,
-                       StagedFiles* into = nullptr);
+                       const std::string& space = "", StagedFiles* into = nullptr);
 
 }  // namespace occseg

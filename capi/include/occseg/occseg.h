@@ -208,17 +208,18 @@ OCCSEG_API int occseg_map_from_buffer_flags(occseg_map **out, const void *data, 
 
 /* Reads a map with the reader registered for the path's extension (see Plugins below): .npy
  * (float32, float64, uint8 or uint16, indexed [z, y, x] or [y, x], C or Fortran order; voxel
- * size 1, origin (0, 0, 0)), .nrrd, or what plugins add. OCCSEG_EIO if it cannot be read,
+ * size 1, origin (0, 0, 0)), .nrrd (origin and voxel size in the file's own space, e.g. LPS,
+ * which the map remembers for occseg_map_write), or what plugins add. OCCSEG_EIO if it cannot be read,
  * OCCSEG_EFORMAT if it is not a valid file, OCCSEG_EVALUE for bad probabilities,
  * OCCSEG_EUNSUPPORTED for an extension no reader handles. */
 OCCSEG_API int occseg_map_read(occseg_map **out, const char *path);
 
 /* Writes the map with the writer registered for the path's extension: .npy (float32 [z, y, x]),
- * .nrrd (float, with voxel size and origin), or what plugins add; all or nothing: the built-in
- * writers write a new temporary beside `path` completely (created as occseg_result_write's are)
- * and rename it over `path` only then, so on any failure (OCCSEG_EIO naming the path) the old
- * file is unchanged and no temporary is left. OCCSEG_EUNSUPPORTED for an extension no writer
- * handles. */
+ * .nrrd (float, with voxel size and origin, in the space of the .nrrd the map was read from, else
+ * right-anterior-superior), or what plugins add; all or nothing: the built-in writers write a new
+ * temporary beside `path` completely (created as occseg_result_write's are) and rename it over
+ * `path` only then, so on any failure (OCCSEG_EIO naming the path) the old file is unchanged and
+ * no temporary is left. OCCSEG_EUNSUPPORTED for an extension no writer handles. */
 OCCSEG_API int occseg_map_write(const occseg_map *map, const char *path);
 
 /* Frees a map. NULL is a no-op. */

@@ -58,6 +58,15 @@ namespace {
 using kernels::TouchBox;
 using kernels::Walk;
 
+// floor(p) clamped to the voxels [0, n - 1] of an axis, clamped while still a double: a ray from
+// a sensor 10^36 voxels away rounds p to 10^22 or so, and converting such a double (or a NaN) to
+// long is undefined. Equal to clamp(long(floor(p))) wherever that is defined.
+long voxel_on_axis(double p, double n) {
+  const double f = std::floor(p);
+  if (!(f > 0)) return 0;  // NaN too
+  return f < n - 1 ? static_cast<long>(f) : static_cast<long>(n) - 1;
+}
+
 // Sets up the traversal of the segment a -> b (grid units: (world - origin) / voxel_size),
 // clipped to the grid box; false when the segment misses the box. The floating-point arithmetic
 // (clipping, tmax, tdelta, and in the kernels' steps the axis choice and tmax updates) is exactly
@@ -86,9 +95,9 @@ bool start_walk(const double* a, const double* b, bool hit, const Dims& dims, Wa
   double tmax[3], tdelta[3];
   for (int k = 0; k < 3; ++k) {
     const double p = a[k] + t0 * d[k];
-    c[k] = std::clamp(static_cast<long>(std::floor(p)), 0L, static_cast<long>(n[k]) - 1);
+    c[k] = voxel_on_axis(p, n[k]);
     const double q = a[k] + t1 * d[k];
-    last[k] = std::clamp(static_cast<long>(std::floor(q)), 0L, static_cast<long>(n[k]) - 1);
+    last[k] = voxel_on_axis(q, n[k]);
     if (d[k] > 0) {
       w.step[k] = 1;
       tmax[k] = (c[k] + 1 - a[k]) / d[k];

@@ -2,34 +2,18 @@
 // box is 16 x 16 x 16 tree voxels around the origin, so a tiny file naming far-apart leaves
 // cannot ask for a huge grid (legal, OCCSEG_ENOMEM in the normal build, but not a finding).
 #include <cmath>
-#include <sstream>
+#include <string>
 
 #include "fuzz_common.hpp"
 #include "occseg/octomap_file.hpp"
-
-namespace {
-
-// The smallest 'res' of the header lines (the reader keeps the last; the smallest bounds all).
-double header_res(const std::uint8_t* data, std::size_t size) {
-  std::istringstream in(std::string(reinterpret_cast<const char*>(data), size));
-  std::string line;
-  double res = 0;
-  while (std::getline(in, line)) {
-    std::istringstream ls(line);
-    std::string key;
-    double r;
-    if (!(ls >> key)) continue;
-    if (key == "data") break;
-    if (key == "res" && ls >> r && r > 0 && (res == 0 || r < res)) res = r;
-  }
-  return res;
-}
-
-}  // namespace
+#include "octree_header.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  double res = header_res(data, size);
-  if (!(res > 0) || !std::isfinite(res)) res = 1;  // the reader rejects the file anyway
+  // The resolution the reader will use: the header as liboctomap reads it (a line-by-line guess
+  // would miss a one-line header and size the box in the wrong unit).
+  const occseg::octree_detail::RawHeader h =
+      occseg::octree_detail::parse_raw_header(std::string(reinterpret_cast<const char*>(data), size));
+  const double res = h.complete && h.res > 0 && std::isfinite(h.res) ? h.res : 1;  // else refused anyway
   const std::string path = occseg::fuzz::as_file(data, size);
   occseg::OctreeOptions o;
   o.bbox = occseg::Box{{-8 * res, -8 * res, -8 * res}, {8 * res, 8 * res, 8 * res}};
