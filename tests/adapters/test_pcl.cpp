@@ -68,7 +68,7 @@ TEST(PclCloud, AnyPointTypeGivesTheSameGrid) {
   }
   EXPECT_FALSE(detail::xyz_layout<DoublePoint>().packed);
   EXPECT_TRUE(detail::xyz_layout<pcl::PointXYZRGBA>().packed);
-  const Eigen::Isometry3f pose = make_pose({0.1, 0.2, 0.3}, {0.9, 0.1, -0.2, 0.3});
+  const Eigen::Isometry3f pose = make_pose({0.1, 0.2, 0.3}, {0.9, 0.1, -0.2, 0.3}).cast<float>();
   const GridFrame f = frame_for_box(Box{{-1, -1, -1}, {2, 2, 2}}, 0.1);
   OccupancyFusion fa(f), fb(f), fc(f), fd(f), ref(f);
   insert_cloud(fa, a, pose, 1);

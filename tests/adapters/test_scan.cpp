@@ -39,7 +39,7 @@ TEST(ScanFrame, PoseTransformsPointsBeforeRayCasting) {
   // A 90 degree turn about z plus a shift: sensor-frame point (1, 0, 0) lands at world
   // (2.2, 1.2, 0.1). Points stay off voxel faces so float rounding cannot move them.
   const double s = std::sqrt(0.5);
-  const Eigen::Isometry3f pose = make_pose({2.2, 0.2, 0.1}, {s, 0, 0, s});
+  const Eigen::Isometry3f pose = make_pose({2.2, 0.2, 0.1}, {s, 0, 0, s}).cast<float>();
   EXPECT_FALSE(is_identity(pose));
   EXPECT_TRUE(is_identity(make_pose({0, 0, 0})));
   GridFrame f = frame_for_box(Box{{0, -1, -0.5}, {4, 3, 0.5}}, 0.5);
