@@ -178,6 +178,33 @@ TEST(PclRealData, TableSceneBoundsFreeSpaceAndTableTop) {
   EXPECT_GE(double(free) / checked, 0.999) << free << " of " << checked;
 }
 
+// The table scene seen from a sensor at UTM-like coordinates (easting 500 km, northing 5000 km)
+// is the same map as at the world origin, voxel for voxel: boxes and sensor are shifted by the
+// same whole number of metres, so the coordinates relative to the grid are the same doubles. In
+// float world coordinates (0.5 m apart at 5e6 m) the occupied voxels dropped from 507 to 270.
+TEST(PclRealData, FarFromTheWorldOriginTheTableSceneIsTheSameMap) {
+  const std::array<double, 4> camera{0, 1, 0, 0};  // the file's VIEWPOINT: 180 degrees about x
+  const Box near{{-0.5, -0.25, -2.75}, {0.75, 0.75, 0.25}};
+  const Vec3 shift{500000, 5000000, 0};
+  ScanOptions a = opts(0.02), b = opts(0.02);
+  a.bbox = near;
+  a.sensor_pose = make_pose({0, 0, 0}, camera);
+  b.bbox = Box{{near.min[0] + shift[0], near.min[1] + shift[1], near.min[2] + shift[2]},
+               {near.max[0] + shift[0], near.max[1] + shift[1], near.max[2] + shift[2]}};
+  b.sensor_pose = make_pose(shift, camera);
+  const Grid ga = read_pcd(kTable, a), gb = read_pcd(kTable, b);
+  ASSERT_TRUE(ga.dims == gb.dims);
+  std::size_t occupied_a = 0, occupied_b = 0;
+  for (std::size_t i = 0; i < ga.p.size(); ++i) {
+    occupied_a += ga.p[i] > 0.502f;
+    occupied_b += gb.p[i] > 0.502f;
+  }
+  EXPECT_GT(occupied_a, 1000u);
+  EXPECT_EQ(occupied_b, occupied_a);
+  EXPECT_TRUE(ga.p == gb.p) << "the far map differs";
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(gb.origin[k], ga.origin[k] + shift[k]);
+}
+
 // The table top and the mug standing on it, at several voxel sizes: the table top is one occupied
 // segment, the mug another (the default preset's support-plane split; docs/algorithm.md). The
 // table is the plane n.p + d = 0 (camera frame) found by RANSAC over this cloud (300 samples, 1 cm

@@ -4,6 +4,9 @@
 #include <octomap/ColorOcTree.h>
 #include <octomap/OcTree.h>
 
+#include <sys/stat.h>
+
+#include <cstdio>
 #include <cstring>
 #include <random>
 
@@ -109,6 +112,60 @@ TEST(BadFiles, MissingDirectoryAndUnreadablePathsAreIoErrorsNamingThePath) {
     EXPECT_EQ(o.status, Status::io) << format << ": " << o.message;
     EXPECT_NE(o.message.find("it is a directory"), std::string::npos) << format << ": " << o.message;
   }
+}
+
+// A FIFO blocked every reader in open() (waiting for a writer, forever), and a link to
+// /dev/zero was read until memory ran out before any magic was checked. Only regular files are
+// read now: the others are EIO naming the file and its kind, with nothing read. Each read runs
+// in a child with an alarm, so that a regression fails this test instead of hanging it, and
+// (outside sanitizer builds) with an address-space limit for the endless /dev/zero.
+TEST(BadFiles, FifosAndDevicesAreRefusedWithoutReadingOrBlocking) {
+  const std::string dir = scratch("special");
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+  const bool limit_memory = false;  // RLIMIT_AS and sanitizer shadow memory do not mix
+#else
+  const bool limit_memory = true;
+#endif
+  struct Case {
+    std::string path, kind;
+  };
+  for (const char* format : {"npy", "nrrd", "pcd", "bt", "ot", "graph"}) {
+    const std::string fifo = dir + "/fifo." + format, null = dir + "/null." + format, zero = dir + "/zero." + format;
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0) << fifo;
+    fs::create_symlink("/dev/null", null);
+    fs::create_symlink("/dev/zero", zero);
+    for (const Case& c : {Case{fifo, "FIFO"}, Case{null, "character device"}, Case{zero, "character device"}}) {
+      const std::string report = dir + "/report";
+      const int rc = in_child([&] {
+        ::alarm(60);  // a hang is a failure (SIGALRM: 128 + 14), not a stuck test
+        if (limit_memory) {  // what is in use plus 512 MiB
+          std::FILE* f = std::fopen("/proc/self/statm", "r");
+          unsigned long pages = 0;
+          if (!f || std::fscanf(f, "%lu", &pages) != 1) return 5;
+          std::fclose(f);
+          const rlim_t bytes = pages * static_cast<rlim_t>(::sysconf(_SC_PAGESIZE)) + (rlim_t(1) << 29);
+          const rlimit r{bytes, bytes};
+          if (::setrlimit(RLIMIT_AS, &r) != 0) return 6;
+        }
+        const Outcome o = read_as(format, c.path);
+        put(report, o.message);
+        return o.status == Status::io ? 0 : 1;
+      });
+      const std::string message = slurp(report);
+      EXPECT_EQ(rc, 0) << c.path << ": " << message;
+      EXPECT_NE(message.find(c.path), std::string::npos) << message;
+      EXPECT_NE(message.find("not a regular file but a " + c.kind), std::string::npos) << message;
+    }
+  }
+  // A FIFO named *.so: the plugin loader refused it only after dlopen() had waited for a writer.
+  const std::string so = dir + "/fifo.so";
+  ASSERT_EQ(::mkfifo(so.c_str(), 0600), 0);
+  const int rc = in_child([&] {
+    ::alarm(60);
+    const int s = occseg_plugins_load(so.c_str());
+    return s == OCCSEG_EPLUGIN && std::strstr(occseg_last_error(), "FIFO") ? 0 : 1;
+  });
+  EXPECT_EQ(rc, 0);
 }
 
 TEST(BadFiles, FilesWithoutReadPermissionAreIoErrors) {

@@ -357,7 +357,8 @@ OCCSEG_API int occseg_result_write(const occseg_result *result, const char *dir)
 
 /* Loads one plugin file (a shared object exporting occseg_plugin_entry). Fails with
  * OCCSEG_EPLUGIN, and a last-error text naming the file and the reason, when it cannot be
- * opened (with the dlerror() text), has no entry point, was built for another plugin ABI major
+ * opened (with the dlerror() text), is not a regular file (a FIFO, a device: refused before
+ * dlopen, which would wait for a FIFO's writer forever), has no entry point, was built for another plugin ABI major
  * or a newer minor, uses a plugin, stage, extension or parameter name that is already taken, or
  * its register function fails; the registry is then unchanged. */
 OCCSEG_API int occseg_plugins_load(const char *path);
@@ -366,7 +367,7 @@ OCCSEG_API int occseg_plugins_load(const char *path);
  * OCCSEG_PLUGIN_PATH (colon-separated), then the install's <libdir>/occseg/plugins (found
  * next to the loaded liboccseg, so relocated installs work, then at the configured prefix).
  * A plugin whose name is already loaded is skipped (the first in the path wins). All files are
- * tried; if any fails, returns OCCSEG_EPLUGIN with every failure in the last-error text.
+ * tried (a *.so that is not a regular file fails without being opened); if any fails, returns OCCSEG_EPLUGIN with every failure in the last-error text.
  * `loaded` (may be NULL) receives the number of plugins loaded by this call. */
 OCCSEG_API int occseg_plugins_load_default(uint32_t *loaded);
 
