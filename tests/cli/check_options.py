@@ -3,7 +3,7 @@ numbers are usage errors naming the option (CLI11's own range checks let NaN thr
 `--voxel-size nan` used to be ignored with exit 0); options of another input format are usage
 errors; values that put a map out of range are bad input saying so; a quaternion whose norm
 overflows is still the rotation it names; and a cloud seen from UTM-like coordinates gives the
-same map as at the world origin (it lost two thirds of its occupied voxels in float)."""
+same map as at the world origin (in float it lost half to two thirds of its occupied voxels)."""
 import json
 import os
 import subprocess
