@@ -191,9 +191,9 @@ Eigen::Isometry3d make_pose(const Vec3& origin, const std::array<double, 4>& q) 
     m = std::max(m, std::fabs(v));
   }
   if (m == 0) throw Error(Status::bad_value, "sensor orientation quaternion is zero");
-  // Scaled by a power of two (exact) to bring the largest component into [1, 2): the squares
-  // can then neither overflow (1e200) nor underflow (1e-200), and the normalised quaternion is
-  // the one the unscaled arithmetic gives wherever that does not overflow.
+  // Scaled by a power of two to bring the largest component into [1, 2): the squares can then
+  // neither overflow (1e200) nor underflow (1e-200). The scaling is exact (bar components too
+  // small to matter), so where the unscaled arithmetic does not overflow it gives the same bits.
   const int e = std::ilogb(m);
   Eigen::Quaterniond qd(std::ldexp(q[0], -e), std::ldexp(q[1], -e), std::ldexp(q[2], -e), std::ldexp(q[3], -e));
   qd.normalize();

@@ -64,8 +64,9 @@ class ScanBounds {
   }
   bool empty() const { return !any_; }
   // The smallest voxel-aligned frame holding everything added, padded by `margin` metres
-  // (fit_frame of the core). Throws Error(bad_value) if nothing finite was added, and "... is out
-  // of range" when the points or sensor origins reach beyond 2^40 voxels from the world origin.
+  // (fit_frame of the core). Throws Error(bad_value) if nothing finite was added, and "points or
+  // sensor origins at x = ... m: out of range, ..." when they reach beyond 2^40 voxels from the
+  // world origin.
   GridFrame frame(double voxel_size, double margin) const;
 
  private:
@@ -90,8 +91,9 @@ class ScanFusion {
  public:
   ScanFusion(const GridFrame& frame, const SensorModel& model);
   // One scan of `count` points (x, y, z floats, `stride` floats apart) in the sensor frame, seen
-  // from `pose`. Throws Error(bad_value) "sensor origin ... is out of range" for a sensor more
-  // than 2^40 voxels from the world origin, Error(cancelled) from the progress callback.
+  // from `pose`. Throws Error(bad_value) "sensor origin at x = ... m: out of range, ..." for a
+  // sensor more than 2^40 voxels from the world origin, Error(cancelled) from the progress
+  // callback.
   void insert(const Eigen::Isometry3d& pose, const float* xyz, std::size_t count, std::size_t stride,
               int threads = 0);
   // The fusion itself (for progress and counts); its frame has the origin (0, 0, 0).
