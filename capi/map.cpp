@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "internal.hpp"
+#include "occseg/geometry.hpp"
 #include "occseg/npy.hpp"
 
 using occseg::Dims;
@@ -135,6 +136,7 @@ int occseg_map_from_buffer_flags(occseg_map** out, const void* data, occseg_dtyp
     const Dims d{dims[0], dims[1], dims[2]};
     occseg::check_dims(d);
     check_voxel_size(voxel_size);
+    occseg::check_geometry(d, voxel_size, {0, 0, 0});  // the far corner must not overflow
     ptrdiff_t s[3];
     if (strides) {
       std::copy(strides, strides + 3, s);
@@ -185,6 +187,7 @@ int occseg_map_set_voxel_size(occseg_map* map, double voxel_size) {
   return guard("occseg_map_set_voxel_size", [&] {
     require(map, "map");
     check_voxel_size(voxel_size);
+    occseg::check_geometry(map->grid.dims, voxel_size, map->grid.origin);
     map->grid.voxel_size = voxel_size;
   });
 }
@@ -207,6 +210,7 @@ int occseg_map_set_origin(occseg_map* map, const double origin[3]) {
         std::snprintf(t, sizeof t, "%g", origin[k]);
         throw Error(Status::bad_value, "origin[" + std::to_string(k) + "] = " + t + " is not finite");
       }
+    occseg::check_geometry(map->grid.dims, map->grid.voxel_size, {origin[0], origin[1], origin[2]});
     std::copy(origin, origin + 3, map->grid.origin.begin());
   });
 }

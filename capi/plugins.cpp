@@ -1,11 +1,13 @@
 // occseg_plugin*, occseg_stage*, occseg_param_plugin/_default and the extension-dispatching map
 // readers and writers: the C face of the registry (occseg/registry.hpp).
+#include <string>
 #include <cstring>
 #include <memory>
 
 #include "internal.hpp"
 #include "occseg/occseg_plugin.h"
 #include "nrrd_space.hpp"
+#include "occseg/geometry.hpp"
 #include "occseg/registry.hpp"
 
 using occseg::Error;
@@ -184,6 +186,11 @@ int occseg_map_read_options(occseg_map** out, const char* path, const char* cons
     auto m = std::make_unique<occseg_map>();
     const occseg::capi::NrrdSpaceScope space;  // the built-in .nrrd reader reports the file's space
     m->grid = occseg::read_map(path, option_list(options));
+    try {  // a plugin's reader too: every map the C ABI hands out can be written and read back
+      occseg::check_geometry(m->grid);
+    } catch (const Error& e) {
+      throw Error(e.status(), std::string("'") + path + "': " + e.what());
+    }
     m->nrrd_space = space.value();
     *out = m.release();
   });

@@ -105,16 +105,16 @@ Grid integrate_scan_graph(const octomap::ScanGraph& graph, const ScanOptions& op
       bounds.add(pose_of(*n), points(*n), n->scan ? n->scan->size() : 0, 3, options.model.max_range);
     frame = bounds.frame(options.voxel_size, options.margin);
   }
-  OccupancyFusion fusion(frame, options.model);
+  ScanFusion fusion(frame, options.model);  // precise wherever the grid lies
   std::size_t total = 0, before = 0;
   for (const octomap::ScanNode* n : graph) total += n->scan ? n->scan->size() : 0;
-  attach_progress(fusion, options, &before, total);
+  attach_progress(fusion.fusion(), options, &before, total);
   for (const octomap::ScanNode* n : graph) {
     const std::size_t count = n->scan ? n->scan->size() : 0;
-    insert_points(fusion, pose_of(*n), points(*n), count, 3, options.threads);
+    fusion.insert(pose_of(*n), points(*n), count, 3, options.threads);
     before += count;
   }
-  if (!fusion.rays()) throw Error(Status::bad_value, "no finite point in the scan graph");
+  if (!fusion.fusion().rays()) throw Error(Status::bad_value, "no finite point in the scan graph");
   return fusion.grid();
 }
 

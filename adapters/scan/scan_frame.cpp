@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "occseg/error.hpp"
+#include "occseg/geometry.hpp"
 #include "occseg/parallel.hpp"
 #include "occseg/scan_options.hpp"
 
@@ -42,6 +43,7 @@ GridFrame frame_for_box(const Box& box, double voxel_size) {
   }
   f.dims = Dims{n[0], n[1], n[2]};
   check_dims(f.dims);
+  check_geometry(f.dims, f.voxel_size, f.origin);
   return f;
 }
 
@@ -57,20 +59,20 @@ void ScanBounds::extend(const Vec3& p) {
   }
 }
 
-void ScanBounds::add(const Eigen::Isometry3f& pose, const float* xyz, std::size_t count, std::size_t stride,
+void ScanBounds::add(const Eigen::Isometry3d& pose, const float* xyz, std::size_t count, std::size_t stride,
                      double max_range) {
-  const Eigen::Vector3f s = pose.translation();
+  const Eigen::Vector3d s = pose.translation();
   if (!s.allFinite()) throw Error(Status::bad_value, "sensor origin is not finite");
   extend({s.x(), s.y(), s.z()});
-  const Eigen::Matrix3f r = pose.linear();
+  const Eigen::Matrix3d r = pose.linear();
   for (std::size_t i = 0; i < count; ++i) {
     const float* p = xyz + i * stride;
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) continue;
-    Eigen::Vector3d w = (r * Eigen::Vector3f(p[0], p[1], p[2]) + s).cast<double>();
+    Eigen::Vector3d w = r * Eigen::Vector3d(p[0], p[1], p[2]) + s;
     if (max_range >= 0) {
-      const Eigen::Vector3d d = w - s.cast<double>();
+      const Eigen::Vector3d d = w - s;
       const double len = d.norm();
-      if (len > max_range) w = s.cast<double>() + d * (max_range / len);
+      if (len > max_range) w = s + d * (max_range / len);
     }
     extend({w.x(), w.y(), w.z()});
   }
@@ -78,7 +80,17 @@ void ScanBounds::add(const Eigen::Isometry3f& pose, const float* xyz, std::size_
 
 GridFrame ScanBounds::frame(double voxel_size, double margin) const {
   if (!any_) throw Error(Status::bad_value, "no scan to fit a grid to");
-  return fit_frame({lo_, hi_}, voxel_size, margin);
+  if (!(voxel_size > 0) || !std::isfinite(voxel_size))
+    throw Error(Status::bad_value, "voxel size " + std::to_string(voxel_size) + " is not positive");
+  // Before fitting: far out, floor(x / voxel_size) + 1 rounds back to floor(x / voxel_size) and
+  // the box would have no voxel at all, or points would share voxels they do not share.
+  for (int k = 0; k < 3; ++k) {
+    check_coordinate(lo_[k], k, voxel_size, "points or sensor origins");
+    check_coordinate(hi_[k], k, voxel_size, "points or sensor origins");
+  }
+  const GridFrame f = fit_frame({lo_, hi_}, voxel_size, margin);
+  check_geometry(f.dims, f.voxel_size, f.origin);
+  return f;
 }
 
 void attach_progress(OccupancyFusion& fusion, const ScanOptions& options, const std::size_t* before,
@@ -91,6 +103,10 @@ void attach_progress(OccupancyFusion& fusion, const ScanOptions& options, const 
 
 bool is_identity(const Eigen::Isometry3f& pose) {
   return pose.matrix() == Eigen::Matrix4f::Identity();
+}
+
+bool is_identity(const Eigen::Isometry3d& pose) {
+  return pose.matrix() == Eigen::Matrix4d::Identity();
 }
 
 void insert_points(OccupancyFusion& fusion, const Eigen::Isometry3f& pose, const float* xyz, std::size_t count,
@@ -116,22 +132,74 @@ void insert_points(OccupancyFusion& fusion, const Eigen::Isometry3f& pose, const
   fusion.insert_scan(sensor, world.data(), count, 3, threads);
 }
 
-Eigen::Isometry3f make_pose(const Vec3& origin, const std::array<double, 4>& q) {
-  // The pose is held in floats: converting a finite double beyond their range is undefined.
+namespace {
+
+const GridFrame& checked(const GridFrame& f) {
+  check_geometry(f.dims, f.voxel_size, f.origin);
+  return f;
+}
+
+GridFrame at_zero(GridFrame f) {
+  f.origin = {0, 0, 0};
+  return f;
+}
+
+}  // namespace
+
+ScanFusion::ScanFusion(const GridFrame& frame, const SensorModel& model)
+    : frame_(checked(frame)), fusion_(at_zero(frame), model) {}
+
+void ScanFusion::insert(const Eigen::Isometry3d& pose, const float* xyz, std::size_t count, std::size_t stride,
+                        int threads) {
+  const Eigen::Vector3d t = pose.translation();
+  for (int k = 0; k < 3; ++k) check_coordinate(t[k], k, frame_.voxel_size, "sensor origin");
+  // The sensor and the points relative to the grid corner, in double; only the differences,
+  // which are small inside and near the grid, become floats.
+  const Eigen::Vector3d o(frame_.origin[0], frame_.origin[1], frame_.origin[2]);
+  const Eigen::Vector3d s = t - o;
+  const Vec3 sensor{s.x(), s.y(), s.z()};
+  if (is_identity(pose) && o.isZero()) {  // relative = world: the points as they are, no copy
+    fusion_.insert_scan(sensor, xyz, count, stride, threads);
+    return;
+  }
+  std::vector<float> rel(3 * count);  // NaN points stay NaN and are skipped by the fusion
+  const Eigen::Matrix3d r = pose.linear();
+  parallel_for(count, threads, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) {
+      const float* p = xyz + i * stride;
+      const Eigen::Vector3d w = r * Eigen::Vector3d(p[0], p[1], p[2]) + s;
+      rel[3 * i] = static_cast<float>(w.x());
+      rel[3 * i + 1] = static_cast<float>(w.y());
+      rel[3 * i + 2] = static_cast<float>(w.z());
+    }
+  });
+  fusion_.insert_scan(sensor, rel.data(), count, 3, threads);
+}
+
+Grid ScanFusion::grid() const {
+  Grid g = fusion_.grid();
+  g.origin = frame_.origin;
+  return g;
+}
+
+Eigen::Isometry3d make_pose(const Vec3& origin, const std::array<double, 4>& q) {
   for (double v : origin)
-    if (!std::isfinite(v) || std::fabs(v) > double(std::numeric_limits<float>::max()))
-      throw Error(Status::bad_value, "sensor origin is not finite in single precision");
-  double n2 = 0;
+    if (!std::isfinite(v)) throw Error(Status::bad_value, "sensor origin is not finite");
+  double m = 0;
   for (double v : q) {
     if (!std::isfinite(v)) throw Error(Status::bad_value, "sensor orientation is not finite");
-    n2 += v * v;
+    m = std::max(m, std::fabs(v));
   }
-  if (!(n2 > 1e-12)) throw Error(Status::bad_value, "sensor orientation quaternion is zero");
-  Eigen::Quaterniond qd(q[0], q[1], q[2], q[3]);
+  if (m == 0) throw Error(Status::bad_value, "sensor orientation quaternion is zero");
+  // Scaled by a power of two to bring the largest component into [1, 2): the squares can then
+  // neither overflow (1e200) nor underflow (1e-200). The scaling is exact (bar components too
+  // small to matter), so where the unscaled arithmetic does not overflow it gives the same bits.
+  const int e = std::ilogb(m);
+  Eigen::Quaterniond qd(std::ldexp(q[0], -e), std::ldexp(q[1], -e), std::ldexp(q[2], -e), std::ldexp(q[3], -e));
   qd.normalize();
-  Eigen::Isometry3f pose = Eigen::Isometry3f::Identity();
-  pose.linear() = qd.toRotationMatrix().cast<float>();
-  pose.translation() = Eigen::Vector3f(float(origin[0]), float(origin[1]), float(origin[2]));
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = qd.toRotationMatrix();
+  pose.translation() = Eigen::Vector3d(origin[0], origin[1], origin[2]);
   return pose;
 }
 

@@ -14,15 +14,32 @@ namespace occseg {
 
 namespace {
 
-// Opens `path` for reading and rejects directories; returns the descriptor.
+const char* kind_of(mode_t m) {
+  if (S_ISDIR(m)) return "it is a directory";
+  if (S_ISFIFO(m)) return "it is not a regular file but a FIFO (named pipe)";
+  if (S_ISCHR(m)) return "it is not a regular file but a character device";
+  if (S_ISBLK(m)) return "it is not a regular file but a block device";
+  if (S_ISSOCK(m)) return "it is not a regular file but a socket";
+  return "it is not a regular file";
+}
+
+// Opens `path` for reading and accepts regular files only; returns the descriptor. O_NONBLOCK
+// keeps the open of a FIFO from waiting for a writer (and is cleared before any read); a FIFO or
+// a device could block forever or never end (/dev/zero), so neither is read at all.
 int open_file(const std::string& path, struct stat& st) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  int fd;
+  do fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
+  while (fd < 0 && errno == EINTR);
   if (fd < 0) throw Error(Status::io, "cannot open '" + path + "': " + std::strerror(errno));
-  const int err = ::fstat(fd, &st) != 0 ? errno : 0;
-  if (err || S_ISDIR(st.st_mode)) {
+  int err = ::fstat(fd, &st) != 0 ? errno : 0;
+  if (!err && S_ISREG(st.st_mode)) {
+    const int flags = ::fcntl(fd, F_GETFL);
+    if (flags < 0 || ::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) != 0) err = errno;
+  }
+  if (err || !S_ISREG(st.st_mode)) {
     ::close(fd);
     // libstdc++'s streams would throw from inside the read here; say what it is instead.
-    throw Error(Status::io, "cannot read '" + path + "': " + (err ? std::strerror(err) : "it is a directory"));
+    throw Error(Status::io, "cannot read '" + path + "': " + (err ? std::strerror(err) : kind_of(st.st_mode)));
   }
   return fd;
 }
@@ -44,9 +61,9 @@ std::string read_file(const std::string& path) {
   const int fd = open_file(path, st);
   Closer closer{fd};
   std::string bytes;
-  if (S_ISREG(st.st_mode) && st.st_size > 0) bytes.reserve(static_cast<std::size_t>(st.st_size));
+  if (st.st_size > 0) bytes.reserve(static_cast<std::size_t>(st.st_size));
   char buf[1 << 16];
-  for (;;) {  // until end of file: sizes of pipes and /proc files are not known in advance
+  for (;;) {  // until end of file: the size of /proc files is not known in advance
     const ssize_t n = ::read(fd, buf, sizeof buf);
     if (n == 0) break;
     if (n < 0) {

@@ -9,6 +9,7 @@
 #include "occseg/error.hpp"
 #include "occseg/file_read.hpp"
 #include "occseg/file_write.hpp"
+#include "occseg/geometry.hpp"
 
 namespace occseg {
 
@@ -265,6 +266,11 @@ Grid grid_from_npy(const NpyArray& a, double voxel_size, const std::string& name
   Grid g;
   g.dims = d;
   g.voxel_size = voxel_size;
+  try {
+    check_geometry(g);
+  } catch (const Error& e) {
+    throw Error(e.status(), "'" + name + "': " + e.what());
+  }
   g.p.resize(d.count());
   const std::size_t n = d.count();
   // The element type is decided once, not per voxel: one copy loop per dtype.

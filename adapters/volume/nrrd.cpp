@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "occseg/error.hpp"
+#include "occseg/geometry.hpp"
 #include "occseg/file_read.hpp"
 #include "occseg/file_write.hpp"
 
@@ -390,6 +391,11 @@ Grid grid_from_nrrd(const NrrdVolume& v, const std::string& name) {
   g.dims = v.dims;
   g.voxel_size = s;
   for (int k = 0; k < 3; ++k) g.origin[k] = v.origin[k] - s / 2;
+  try {
+    check_geometry(g);
+  } catch (const Error& e) {
+    throw Error(e.status(), "'" + name + "': " + e.what());
+  }
   const std::size_t n = v.dims.count();
   g.p.resize(n);
   const unsigned char* d = v.data.data();
@@ -421,6 +427,19 @@ void write_nrrd(const std::string& path, NrrdType type, const Dims& dims, double
   int space_dim = 3;
   if (!space.empty() && (!canonical_space(space, space_name, space_dim) || space_dim != 3))
     throw Error(Status::invalid_argument, "write_nrrd: '" + printable(space) + "' is not a 3D NRRD space");
+  // What read_nrrd will find: the centre of the first voxel, and the corner it gives back. Both
+  // must pass the reader's geometry check, or the file would be one occseg cannot read.
+  std::array<double, 3> centre{}, back{};
+  for (int k = 0; k < 3; ++k) {
+    centre[k] = corner[k] + voxel_size / 2;
+    back[k] = centre[k] - voxel_size / 2;
+  }
+  try {
+    check_geometry(dims, voxel_size, corner);
+    check_geometry(dims, voxel_size, back);
+  } catch (const Error& e) {
+    throw Error(e.status(), "cannot write '" + path + "': " + e.what());
+  }
   std::ostringstream h;
   h << "NRRD0004\n# Complete NRRD file format specification at:\n# http://teem.sourceforge.net/nrrd/format.html\n";
   if (!content.empty()) h << "content: " << content << "\n";
@@ -428,8 +447,7 @@ void write_nrrd(const std::string& path, NrrdType type, const Dims& dims, double
     << "sizes: " << dims.nx << " " << dims.ny << " " << dims.nz << "\n"
     << "space directions: (" << num(voxel_size) << ",0,0) (0," << num(voxel_size) << ",0) (0,0," << num(voxel_size)
     << ")\nkinds: domain domain domain\nendian: little\nencoding: raw\n"
-    << "space origin: (" << num(corner[0] + voxel_size / 2) << "," << num(corner[1] + voxel_size / 2) << ","
-    << num(corner[2] + voxel_size / 2) << ")\n\n";
+    << "space origin: (" << num(centre[0]) << "," << num(centre[1]) << "," << num(centre[2]) << ")\n\n";
   const std::string header = h.str();
   write_file_atomically(path, [&](std::ostream& out) {
     out.write(header.data(), static_cast<std::streamsize>(header.size()));

@@ -2,11 +2,13 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
 #include <cstring>
 #include <utility>
 #include <vector>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 #include "occseg/error.hpp"
 #include "occseg/npy.hpp"
@@ -212,6 +214,58 @@ TEST(Nrrd, TheFilesSpaceIsKeptAndWrittenBack) {
   EXPECT_NE(slurp(out).find("\nspace: right-anterior-superior\n"), std::string::npos);
   EXPECT_EQ(status_of([&] { write_labels_nrrd(out, g, labels, "RAST"); }), Status::invalid_argument);
   EXPECT_EQ(status_of([&] { write_labels_nrrd(out, g, labels, "sideways"); }), Status::invalid_argument);
+}
+
+// The writer refuses a geometry its reader would refuse (the C++ Grid is an open struct, so a
+// caller can build any): before, an origin of DBL_MAX with big voxels was written as
+// "space origin: (inf, ...)", and one of 1.7e308 as a map whose voxels all share x.
+TEST(Nrrd, WriterRefusesGeometryItsReaderRefusesAndWritesNothing) {
+  auto refused = [](Grid g, const std::string& name, const std::string& words) {
+    const std::string f = tmp(name);
+    fs::remove(f);
+    try {
+      write_grid_nrrd(f, g);
+      ADD_FAILURE() << name << " was written";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.status(), Status::bad_value) << e.what();
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    }
+    for (const auto& e : fs::directory_iterator(fs::path(f).parent_path()))  // no file, no temporary
+      EXPECT_NE(e.path().filename().string().rfind(name, 0), 0u) << e.path();
+  };
+  Grid g = ramp();
+  g.origin = {std::numeric_limits<double>::max(), 0, 0};
+  g.voxel_size = 1e300;  // centre = origin + 5e299 = inf
+  refused(g, "centre_inf.nrrd", "out of range");
+  g = ramp();
+  g.origin = {1.7e308, 0, 0};
+  refused(g, "far_origin.nrrd", "out of range");
+  g = ramp();
+  g.voxel_size = 1e308;  // 4 voxels: far corner inf
+  refused(g, "extent_inf.nrrd", "out of range");
+  g = ramp();
+  g.voxel_size = std::numeric_limits<double>::quiet_NaN();
+  refused(g, "nan_voxel.nrrd", "voxel size");
+  // The reader refuses the same, naming the file.
+  const std::string f = tmp("far_read.nrrd");
+  put(f, "NRRD0004\ntype: float\ndimension: 3\nspace: RAS\nsizes: 1 1 1\nspace directions: (1,0,0) (0,1,0) (0,0,1)\n"
+         "endian: little\nencoding: raw\nspace origin: (0,1e300,0)\n\n" + std::string(4, '\0'));
+  try {
+    grid_from_nrrd(read_nrrd(f), f);
+    ADD_FAILURE() << "read";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.status(), Status::bad_value) << e.what();
+    EXPECT_NE(std::string(e.what()).find("far_read.nrrd"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("out of range"), std::string::npos) << e.what();
+  }
+  // .npy carries no geometry, so grid_from_npy checks the voxel size it is given.
+  const std::string n = tmp("small.npy");
+  const float zeros[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+  write_npy(n, "<f4", {2, 2, 2}, zeros, sizeof zeros);
+  EXPECT_EQ(status_of([&] { grid_from_npy(read_npy(n), 1e308, n); }), Status::bad_value);
+  EXPECT_EQ(status_of([&] { grid_from_npy(read_npy(n), std::nan(""), n); }), Status::bad_value);
+  EXPECT_EQ(status_of([&] { grid_from_npy(read_npy(n), 0.05, n); }), Status::ok);
 }
 
 TEST(NpyWriters, EveryCAbiDtypeRoundTrips) {

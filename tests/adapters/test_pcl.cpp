@@ -68,7 +68,7 @@ TEST(PclCloud, AnyPointTypeGivesTheSameGrid) {
   }
   EXPECT_FALSE(detail::xyz_layout<DoublePoint>().packed);
   EXPECT_TRUE(detail::xyz_layout<pcl::PointXYZRGBA>().packed);
-  const Eigen::Isometry3f pose = make_pose({0.1, 0.2, 0.3}, {0.9, 0.1, -0.2, 0.3});
+  const Eigen::Isometry3f pose = make_pose({0.1, 0.2, 0.3}, {0.9, 0.1, -0.2, 0.3}).cast<float>();
   const GridFrame f = frame_for_box(Box{{-1, -1, -1}, {2, 2, 2}}, 0.1);
   OccupancyFusion fa(f), fb(f), fc(f), fd(f), ref(f);
   insert_cloud(fa, a, pose, 1);
@@ -176,6 +176,33 @@ TEST(PclRealData, TableSceneBoundsFreeSpaceAndTableTop) {
   std::printf("table scene: %zu of %zu samples in front of the first surface are free\n", free, checked);
   ASSERT_GT(checked, 100000u);
   EXPECT_GE(double(free) / checked, 0.999) << free << " of " << checked;
+}
+
+// The table scene seen from a sensor at UTM-like coordinates (easting 500 km, northing 5000 km)
+// is the same map as at the world origin, voxel for voxel: boxes and sensor are shifted by the
+// same whole number of metres, so the coordinates relative to the grid are the same doubles. In
+// float world coordinates (0.5 m apart at 5e6 m) the occupied voxels dropped from 2,591 to 781.
+TEST(PclRealData, FarFromTheWorldOriginTheTableSceneIsTheSameMap) {
+  const std::array<double, 4> camera{0, 1, 0, 0};  // the file's VIEWPOINT: 180 degrees about x
+  const Box near{{-0.5, -0.25, -2.75}, {0.75, 0.75, 0.25}};
+  const Vec3 shift{500000, 5000000, 0};
+  ScanOptions a = opts(0.02), b = opts(0.02);
+  a.bbox = near;
+  a.sensor_pose = make_pose({0, 0, 0}, camera);
+  b.bbox = Box{{near.min[0] + shift[0], near.min[1] + shift[1], near.min[2] + shift[2]},
+               {near.max[0] + shift[0], near.max[1] + shift[1], near.max[2] + shift[2]}};
+  b.sensor_pose = make_pose(shift, camera);
+  const Grid ga = read_pcd(kTable, a), gb = read_pcd(kTable, b);
+  ASSERT_TRUE(ga.dims == gb.dims);
+  std::size_t occupied_a = 0, occupied_b = 0;
+  for (std::size_t i = 0; i < ga.p.size(); ++i) {
+    occupied_a += ga.p[i] > 0.502f;
+    occupied_b += gb.p[i] > 0.502f;
+  }
+  EXPECT_GT(occupied_a, 1000u);
+  EXPECT_EQ(occupied_b, occupied_a);
+  EXPECT_TRUE(ga.p == gb.p) << "the far map differs";
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(gb.origin[k], ga.origin[k] + shift[k]);
 }
 
 // The table top and the mug standing on it, at several voxel sizes: the table top is one occupied

@@ -79,6 +79,66 @@ TEST(BadValues, VoxelSizeAndOriginMustBeFinite) {
   occseg_map_free(m);
 }
 
+// A map whose box reaches beyond 2^40 voxels from the world origin, or whose far corner
+// overflows to infinity, is refused where it would be made: before, occseg_map_write wrote such
+// a map as an NRRD whose origin or extent its own reader refuses (or whose voxels all sat at one
+// coordinate). Every map that is accepted writes and reads back with its geometry.
+TEST(BadValues, MapsOutOfRangeAreRefusedSoEveryMapWrittenReadsBack) {
+  float p[64];
+  for (float& v : p) v = 0.25f;
+  occseg_map* m = nullptr;
+  // 4 voxels of 1e308 m: the far corner is inf.
+  EXPECT_STATUS(occseg_map_from_buffer(&m, p, OCCSEG_F32, k444, nullptr, 1e308), OCCSEG_EVALUE, "out of range");
+  EXPECT_EQ(m, nullptr);
+  ASSERT_EQ(occseg_map_from_buffer(&m, p, OCCSEG_F32, k444, nullptr, 1.0), OCCSEG_OK);
+  const double huge[3] = {1.7e308, 0, 0}, max[3] = {0, std::numeric_limits<double>::max(), 0};
+  EXPECT_STATUS(occseg_map_set_origin(m, huge), OCCSEG_EVALUE, "out of range");
+  EXPECT_STATUS(occseg_map_set_origin(m, max), OCCSEG_EVALUE, "out of range");
+  const double beyond[3] = {0, 0, -std::ldexp(1.0, 40) - 8};  // 2^40 + 8 voxels from the origin
+  EXPECT_STATUS(occseg_map_set_origin(m, beyond), OCCSEG_EVALUE, "extent in z");
+  const double utm[3] = {500000.25, 5000000.5, 12.0};
+  ASSERT_EQ(occseg_map_set_origin(m, utm), OCCSEG_OK);
+  // A voxel size that puts the box out of range, with that origin, is refused too.
+  EXPECT_STATUS(occseg_map_set_voxel_size(m, 1e-7), OCCSEG_EVALUE, "out of range");
+  EXPECT_STATUS(occseg_map_set_voxel_size(m, 1e308), OCCSEG_EVALUE, "out of range");  // far corner inf
+  double vs = 0, o[3] = {0, 0, 0};
+  ASSERT_EQ(occseg_map_voxel_size(m, &vs), OCCSEG_OK);
+  ASSERT_EQ(occseg_map_origin(m, o), OCCSEG_OK);
+  EXPECT_EQ(vs, 1.0);  // refused setters change nothing
+  EXPECT_EQ(o[0], utm[0]);
+  EXPECT_EQ(o[1], utm[1]);
+  // The edge of the range: 2^40 - 4 voxels of 2^-10 m from the world origin, written and read back.
+  ASSERT_EQ(occseg_map_set_voxel_size(m, std::ldexp(1.0, -10)), OCCSEG_OK);
+  const double edge[3] = {std::ldexp(1.0, 30) - 4 * std::ldexp(1.0, -10), -std::ldexp(1.0, 30), 0};
+  ASSERT_EQ(occseg_map_set_origin(m, edge), OCCSEG_OK);
+  const std::string dir = scratch("geometry");
+  for (const char* name : {"edge.nrrd", "utm.nrrd"}) {
+    if (std::string(name) == "utm.nrrd") {
+      ASSERT_EQ(occseg_map_set_voxel_size(m, 0.05), OCCSEG_OK);
+      ASSERT_EQ(occseg_map_set_origin(m, utm), OCCSEG_OK);
+    }
+    const std::string f = dir + "/" + name;
+    ASSERT_EQ(occseg_map_write(m, f.c_str()), OCCSEG_OK) << occseg_last_error();
+    occseg_map* back = nullptr;
+    ASSERT_EQ(occseg_map_read(&back, f.c_str()), OCCSEG_OK) << name << ": " << occseg_last_error();
+    double bvs = 0, bo[3] = {0, 0, 0};
+    ASSERT_EQ(occseg_map_voxel_size(back, &bvs), OCCSEG_OK);
+    ASSERT_EQ(occseg_map_origin(back, bo), OCCSEG_OK);
+    ASSERT_EQ(occseg_map_voxel_size(m, &vs), OCCSEG_OK);
+    ASSERT_EQ(occseg_map_origin(m, o), OCCSEG_OK);
+    EXPECT_EQ(bvs, vs) << name;
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(bo[k], o[k], 1e-9 * std::max(1.0, std::fabs(o[k]))) << name << " " << k;
+    occseg_map_free(back);
+  }
+  occseg_map_free(m);
+  // A hand-written NRRD whose origin is out of range is refused by the reader the same way.
+  const std::string f = dir + "/far.nrrd";
+  put(f, "NRRD0004\ntype: float\ndimension: 3\nspace: RAS\nsizes: 1 1 1\nspace directions: (1,0,0) (0,1,0) (0,0,1)\n"
+         "endian: little\nencoding: raw\nspace origin: (1.7e308,0,0)\n\n" + std::string(4, '\0'));
+  EXPECT_STATUS(occseg_map_read(&m, f.c_str()), OCCSEG_EVALUE, "out of range");
+  EXPECT_EQ(m, nullptr);
+}
+
 TEST(BadDims, ZeroHugeAndOverflowingDimensionsAreRefusedBeforeAnyRead) {
   const std::uint8_t one = 0;  // the data is never read: dims are checked first
   occseg_map* m = nullptr;

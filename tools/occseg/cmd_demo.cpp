@@ -3,6 +3,7 @@
 // scores the segmentation against the ground truth and writes everything to ./occseg-out/:
 // the map and its truth, labels, segments, the picture, the scores and a summary.
 #include <chrono>
+#include <cstdint>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -195,11 +196,12 @@ Runner add_demo(CLI::App& app) {
   c->add_option("--out,-o", o->out_dir, "output directory (default occseg-out; created if missing)");
   c->add_option("--scene", o->scene, "cone (default), cube, cylinder (the paper's), close, table, doorway")
       ->check(CLI::IsMember(sim::scene_names()));
-  c->add_option("--seed", o->seed, "seed of the range noise (default 1)");
+  c->add_option("--seed", o->seed, "seed of the range noise (default 1)")->transform(whole_number(0, UINT64_MAX));
   c->add_option("--mode", o->mode, "planar (the paper's stack of planar scans; default) or full3d")
       ->check(CLI::IsMember({"planar", "full3d"}));
-  c->add_option("--dims", o->dims, "map size NX NY NZ in voxels (default 320 320 128)")->expected(3);
-  c->add_option("--voxel-size", o->voxel_size, "voxel edge in metres (default 0.04)")->check(CLI::PositiveNumber);
+  c->add_option("--dims", o->dims, "map size NX NY NZ in voxels (default 320 320 128)")->expected(3)
+      ->transform(whole_number(1, std::size_t(1) << 40));
+  c->add_option("--voxel-size", o->voxel_size, "voxel edge in metres (default 0.04)")->check(positive_number());
   add_pipeline_options(c, o->pipeline);
   add_report_options(c, o->report);
   return [c, o]() -> int { return c->parsed() ? run(*o) : -1; };

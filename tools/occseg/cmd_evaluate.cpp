@@ -1,12 +1,14 @@
 // `occseg evaluate --truth DIR ...`: scores segmentations of a simulated scene against its ground
 // truth. Either an existing one (--labels and --segments from `occseg segment`), or the methods
 // named by --method run on DIR/map.npy (paper, default, baseline, ideal or all of them side by side).
+#include <cstdint>
 #include <iostream>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "commands.hpp"
+#include "options.hpp"
 #include "occseg/error.hpp"
 #include "occseg/npy.hpp"
 #include "occseg/segment.hpp"
@@ -69,8 +71,8 @@ Runner add_evaluate(CLI::App& app) {
       ->check(CLI::IsMember({"paper", "default", "baseline", "ideal", "all"}));
   c->add_option("--map", o->map, "map to segment instead of TRUTH/map.npy");
   c->add_option("--reach", o->reach, "voxels within which an occupied voxel is attributed to an object (default 3)")
-      ->check(CLI::Range(0, 64));
-  c->add_option("--threads", o->threads, "worker threads, 0 = all cores")->check(CLI::Range(0, 1024));
+      ->transform(whole_number(0, 64));
+  c->add_option("--threads", o->threads, "worker threads, 0 = all cores")->transform(whole_number(0, 1024));
   c->add_flag("--json", o->json, "print JSON instead of a table");
   return [c, o]() -> int { return c->parsed() ? run(*o) : -1; };
 }

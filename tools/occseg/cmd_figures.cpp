@@ -4,6 +4,7 @@
 // after refinement, plus the default preset and the ideal state). Writes DIR/<scene>.png,
 // DIR/results-<mode>.md and DIR/results-<mode>.json, all or none (OutputSet): a failure or Ctrl-C
 // leaves the old files of DIR as they were.
+#include <cstdint>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "options.hpp"
 #include "stages/label.hpp"
 #include "occseg/error.hpp"
 #include "occseg/file_write.hpp"
@@ -164,10 +166,11 @@ Runner add_figures(CLI::App& app) {
   c->add_option("--out,-o", o->out_dir, "output directory (created if missing)")->required();
   c->add_option("--scene", o->scenes, "scene(s), repeatable (default: all)")->check(CLI::IsMember(sim::scene_names()));
   c->add_option("--mode", o->mode, "planar or full3d")->check(CLI::IsMember({"planar", "full3d"}));
-  c->add_option("--dims", o->dims, "map size NX NY NZ (default 320 320 128)")->expected(3);
-  c->add_option("--voxel-size", o->voxel_size, "voxel edge in metres (default 0.04)")->check(CLI::PositiveNumber);
-  c->add_option("--seed", o->seed, "seed of the range noise (default 1)");
-  c->add_option("--threads", o->threads, "worker threads, 0 = all cores")->check(CLI::Range(0, 1024));
+  c->add_option("--dims", o->dims, "map size NX NY NZ (default 320 320 128)")->expected(3)
+      ->transform(whole_number(1, std::size_t(1) << 40));
+  c->add_option("--voxel-size", o->voxel_size, "voxel edge in metres (default 0.04)")->check(positive_number());
+  c->add_option("--seed", o->seed, "seed of the range noise (default 1)")->transform(whole_number(0, UINT64_MAX));
+  c->add_option("--threads", o->threads, "worker threads, 0 = all cores")->transform(whole_number(0, 1024));
   c->add_flag("!--no-pictures", o->pictures, "scores only");
   return [c, o]() -> int { return c->parsed() ? run(*o) : -1; };
 }

@@ -2,12 +2,14 @@
 // over a catalogue scene, fuse the scans into a probabilistic map and write it with its ground
 // truth (map.npy, truth_state.npy, truth_objects.npy, scene.json), all four or none (OutputSet):
 // a failure or Ctrl-C leaves the old files of DIR as they were.
+#include <cstdint>
 #include <iostream>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "commands.hpp"
+#include "options.hpp"
 #include "occseg/error.hpp"
 #include "occseg/sim/scanner.hpp"
 #include "occseg/sim/truth.hpp"
@@ -68,16 +70,17 @@ Runner add_simulate(CLI::App& app) {
       ->required()
       ->check(CLI::IsMember(sim::scene_names()));
   c->add_option("--out,-o", o->out_dir, "output directory (created if missing)")->required();
-  c->add_option("--seed", o->seed, "seed of the range noise (default 1)");
+  c->add_option("--seed", o->seed, "seed of the range noise (default 1)")->transform(whole_number(0, UINT64_MAX));
   c->add_option("--mode", o->mode, "planar (the paper's stack of planar scans) or full3d")
       ->check(CLI::IsMember({"planar", "full3d"}));
-  c->add_option("--dims", o->dims, "map size NX NY NZ in voxels (default 320 320 128)")->expected(3);
-  c->add_option("--voxel-size", o->voxel_size, "voxel edge in metres (default 0.04)")->check(CLI::PositiveNumber);
+  c->add_option("--dims", o->dims, "map size NX NY NZ in voxels (default 320 320 128)")->expected(3)
+      ->transform(whole_number(1, std::size_t(1) << 40));
+  c->add_option("--voxel-size", o->voxel_size, "voxel edge in metres (default 0.04)")->check(positive_number());
   c->add_option("--sigma", o->sigma, "range noise standard deviation, metres (default 0.04)")
-      ->check(CLI::NonNegativeNumber);
-  c->add_option("--angle-step", o->step, "degrees between rays (default 0.5)")->check(CLI::Range(0.01, 90.0));
-  c->add_option("--max-range", o->max_range, "metres (default 8)")->check(CLI::PositiveNumber);
-  c->add_option("--threads", o->threads, "worker threads, 0 = all cores")->check(CLI::Range(0, 1024));
+      ->check(nonnegative_number());
+  c->add_option("--angle-step", o->step, "degrees between rays (default 0.5)")->check(number_in(0.01, 90.0));
+  c->add_option("--max-range", o->max_range, "metres (default 8)")->check(positive_number());
+  c->add_option("--threads", o->threads, "worker threads, 0 = all cores")->transform(whole_number(0, 1024));
   return [c, o]() -> int { return c->parsed() ? run(*o) : -1; };
 }
 

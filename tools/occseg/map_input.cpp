@@ -9,6 +9,7 @@
 #include <iostream>
 
 #include "occseg/error.hpp"
+#include "occseg/geometry.hpp"
 #include "occseg/npy.hpp"
 #include "occseg/nrrd.hpp"
 #include "occseg/registry.hpp"
@@ -64,6 +65,15 @@ class [[maybe_unused]] SilenceStderr {
   int saved_ = -1;
 };
 
+// A map whose box is out of range (check_geometry) could not be written as labels.nrrd.
+void checked_geometry(const Grid& g, const std::string& path) {
+  try {
+    check_geometry(g);
+  } catch (const Error& e) {
+    throw Error(e.status(), "'" + path + "': " + e.what());
+  }
+}
+
 [[noreturn, maybe_unused]] void not_built(const std::string& ext, const char* lib) {
   throw Error(Status::unsupported, ext + " input needs " + lib + ", which this build of occseg lacks");
 }
@@ -112,9 +122,11 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
   const std::string ext = extension(path);
   MapInput in;
   const bool scan_opts = o.sensor_origin || o.sensor_orientation || o.max_range >= 0;
+  const bool coarsen = !o.coarsen.empty();
   if (ext == ".npy" || ext == ".nrrd") {
     reject(o.bbox.has_value(), "--bbox", ext);
     reject(scan_opts, "--sensor-origin/--sensor-orientation/--max-range", ext);
+    reject(coarsen, "--coarsen", ext);
     in.kind = InputKind::volume;
     if (ext == ".npy") {
       const NpyArray a = read_npy(path);
@@ -129,11 +141,13 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
       if (o.voxel_size) {  // the file's spacing, overridden; keep the first voxel centre in place
         for (double& c : in.grid.origin) c += (in.grid.voxel_size - *o.voxel_size) / 2;
         in.grid.voxel_size = *o.voxel_size;
+        checked_geometry(in.grid, path);
       }
     }
     return in;
   }
   if (ext == ".pcd" || ext == ".graph") {
+    reject(coarsen, "--coarsen", ext);
     in.kind = InputKind::cloud;
     if (ext == ".pcd") {
 #ifdef OCCSEG_HAVE_PCL
@@ -160,7 +174,7 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
     OctreeOptions t;
     t.voxel_size = o.voxel_size.value_or(0.0);
     t.bbox = box_of(o);
-    if (o.coarsen != "max" && o.coarsen != "mean")
+    if (coarsen && o.coarsen != "max" && o.coarsen != "mean")
       throw Error(Status::invalid_argument, "--coarsen '" + o.coarsen + "' is not max or mean");
     t.coarsen = o.coarsen == "mean" ? Coarsen::mean : Coarsen::max;
     {
@@ -176,6 +190,7 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
   if (find_reader(ext)) {  // a reader a plugin registered (occseg plugins lists them)
     reject(o.bbox.has_value(), "--bbox", ext);
     reject(scan_opts, "--sensor-origin/--sensor-orientation/--max-range", ext);
+    reject(coarsen, "--coarsen", ext);
     std::vector<std::string> options;
     if (o.voxel_size) {
       char t[64];
@@ -183,6 +198,7 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
       options.push_back(t);
     }
     in.grid = read_map(path, options);
+    checked_geometry(in.grid, path);
     in.format = ext + " through a plugin reader";
     return in;
   }

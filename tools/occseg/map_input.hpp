@@ -19,7 +19,7 @@ struct MapInputOptions {
   std::optional<std::array<double, 3>> sensor_origin;       // clouds: overrides the stored viewpoint
   std::optional<std::array<double, 4>> sensor_orientation;  // w x y z; with or without an origin
   double max_range = -1;                          // clouds: metres, < 0 unlimited
-  std::string coarsen = "max";                    // trees at a coarser voxel size: max or mean
+  std::string coarsen;                            // trees at a coarser voxel size: max or mean; empty: max
   int threads = 0;
   std::function<bool(double fraction)> progress;  // clouds: fusion progress (ScanOptions::progress)
 };

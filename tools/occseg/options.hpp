@@ -10,6 +10,18 @@
 
 namespace occseg::cli {
 
+// Checks of numeric option values. CLI11's Range and PositiveNumber let NaN through (every
+// comparison with it is false), accept what overflows to infinity only by luck of the bounds,
+// and read "010" as octal 8; these refuse NaN, infinities and overflow, and say so in words:
+// "--voxel-size: nan is not a positive finite number".
+CLI::Validator finite_number();                   // any finite number
+CLI::Validator positive_number();                 // finite and > 0
+CLI::Validator nonnegative_number();              // finite and >= 0
+CLI::Validator number_in(double lo, double hi);   // finite, in [lo, hi]
+// A whole number in decimal digits (no sign, no 0x) in [lo, hi]; "010" is ten. A transform
+// (Option::transform, not check): it hands CLI11 the number without leading zeros.
+CLI::Validator whole_number(unsigned long long lo, unsigned long long hi);
+
 struct PipelineArgs {
   std::string preset = "default";
   std::vector<std::string> params;  // name=value
@@ -26,8 +38,8 @@ std::string params_help();
 struct InputArgs {
   double voxel_size = 0;  // 0: not given
   std::vector<double> bbox, sensor_origin, sensor_orientation;
-  double max_range = -1;
-  std::string coarsen = "max";
+  double max_range = -1;   // < 0: not given (the value given is positive and finite)
+  std::string coarsen;     // empty: not given (max)
 };
 // --voxel-size, --bbox, --sensor-origin, --sensor-orientation, --max-range, --coarsen.
 void add_input_options(CLI::App* cmd, InputArgs& args);

@@ -47,7 +47,11 @@ void install_interrupt_handlers() {
   struct sigaction sa {};
   sa.sa_handler = on_signal;
   sigemptyset(&sa.sa_mask);
-  sa.sa_flags = SA_RESTART;  // reads and writes carry on; the job stops at its next check
+  // No SA_RESTART: a call that blocks (a plugin's reader on a pipe, a write to a stdout nobody
+  // reads) returns EINTR and fails, so Ctrl-C or SIGTERM ends it instead of being swallowed by a
+  // restart; every other job stops at its next check of the flag. Reads and writes of regular
+  // files are never interrupted by a signal, so they are unaffected.
+  sa.sa_flags = 0;
   ::sigaction(SIGINT, &sa, nullptr);
   ::sigaction(SIGTERM, &sa, nullptr);
 }

@@ -1,5 +1,7 @@
 #include "sim_io.hpp"
 
+#include <sys/stat.h>
+
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -9,6 +11,7 @@
 #include <sstream>
 
 #include "occseg/error.hpp"
+#include "occseg/file_read.hpp"
 #include "occseg/file_write.hpp"
 #include "occseg/npy.hpp"
 #include "occseg/sim/baseline.hpp"
@@ -154,10 +157,11 @@ TruthDir read_truth(const std::string& dir) {
     t.truth.state[i] = static_cast<std::uint8_t>(st[i]);
     t.truth.objects[i] = static_cast<std::uint16_t>(ob[i]);
   }
-  std::ifstream in(dir + "/scene.json");
-  if (in) {
+  struct stat info {};
+  if (::stat((dir + "/scene.json").c_str(), &info) == 0) {  // optional; read_file refuses a FIFO
+    const std::string text = read_file(dir + "/scene.json");
     try {
-      const json j = json::parse(in);
+      const json j = json::parse(text);
       t.scene = j.value("scene", "");
       t.voxel_size = j.value("voxel_size", 1.0);
       for (const json& o : j.at("objects")) {
@@ -179,11 +183,10 @@ LabelArray read_labels(const std::string& path, const Dims& dims) {
 }
 
 std::vector<State> read_segment_states(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(Status::io, "cannot open '" + path + "': " + std::strerror(errno));
+  const std::string text = read_file(path);  // a regular file only: a FIFO would block
   std::vector<State> out;
   try {
-    const json j = json::parse(in);
+    const json j = json::parse(text);
     const json& segs = j.at("segments");
     for (std::size_t k = 0; k < segs.size(); ++k) {
       const json& s = segs[k];

@@ -33,7 +33,8 @@ void write_npy(const std::string& path, const std::string& descr, const std::vec
 
 // An occupancy map from an array indexed [z, y, x] (or [y, x] for a 2D map, nz = 1), C or Fortran
 // order. f4/f8 values must be probabilities in [0, 1]; u1 and u2 map 0..max to 0..1. Values are
-// checked (check_probabilities).
+// checked (check_probabilities), and so is the geometry (check_geometry: the voxel size, and the
+// extent within reach of the world origin): Error(bad_value) naming `name`.
 Grid grid_from_npy(const NpyArray& a, double voxel_size, const std::string& name);
 
 // Writes a map as float32 [z, y, x] and labels as uint32 [z, y, x] (`into`: as write_npy).

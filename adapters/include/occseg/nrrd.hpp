@@ -48,7 +48,7 @@ NrrdVolume read_nrrd(const std::string& path);
 // A map from a volume: float/double probabilities in [0, 1], uint8/uint16 scaled 0..max to
 // 0..1. Spacing must be isotropic (the voxel size); the grid origin is the corner of the first
 // voxel. Throws Error(format) for integer label types or anisotropic spacing, Error(bad_value)
-// for values outside [0, 1].
+// for values outside [0, 1] and for a geometry check_geometry refuses (a box out of range).
 Grid grid_from_nrrd(const NrrdVolume& v, const std::string& name);
 
 // The space written when none is given: occseg's world x, y, z as 3D Slicer's R, A, S.
@@ -57,7 +57,9 @@ inline const char* const kNrrdDefaultSpace = "right-anterior-superior";
 // Writes raw little-endian data with the grid geometry above, atomically (write_file_atomically),
 // in `space` (a 3D space's name as teem spells it; empty: kNrrdDefaultSpace), or stages it
 // `into` a set of files replaced together. Throws Error(invalid_argument) for a name that is no
-// 3D NRRD space.
+// 3D NRRD space, and Error(bad_value), writing nothing, when read_nrrd + grid_from_nrrd would
+// refuse the geometry (check_geometry of the corner and of the corner read back from the written
+// centre).
 void write_nrrd(const std::string& path, NrrdType type, const Dims& dims, double voxel_size,
                 const std::array<double, 3>& corner_origin, const void* data, std::size_t bytes,
                 const std::string& content = "", const std::string& space = "", StagedFiles* into = nullptr);

@@ -61,18 +61,24 @@ void with_xyz(const pcl::PointCloud<PointT>& cloud, Fn&& fn) {
 }  // namespace detail
 
 // The sensor pose stored with a cloud (sensor_origin_, sensor_orientation_): maps the cloud's
-// points into the world frame, with the sensor at its translation.
+// points into the world frame, with the sensor at its translation. The quaternion is normalised
+// as make_pose does (no overflow to a silent identity); Error(bad_value) for a zero or
+// non-finite one. cloud_pose_d is the same in double, as the fusion uses it.
+template <typename PointT>
+Eigen::Isometry3d cloud_pose_d(const pcl::PointCloud<PointT>& cloud) {
+  const Eigen::Vector4f& o = cloud.sensor_origin_;
+  const Eigen::Quaternionf& q = cloud.sensor_orientation_;
+  return make_pose({o.x(), o.y(), o.z()}, {q.w(), q.x(), q.y(), q.z()});
+}
 template <typename PointT>
 Eigen::Isometry3f cloud_pose(const pcl::PointCloud<PointT>& cloud) {
-  Eigen::Isometry3f pose = Eigen::Isometry3f::Identity();
-  pose.linear() = cloud.sensor_orientation_.normalized().toRotationMatrix();
-  pose.translation() = cloud.sensor_origin_.template head<3>();
-  return pose;
+  return Eigen::Isometry3f(cloud_pose_d(cloud).template cast<float>());
 }
 
 // Ray-casts one cloud into `fusion`: points are in the sensor frame, `pose` maps them to the
 // world and the sensor sits at pose.translation(). NaN points are skipped; returns beyond the
-// fusion's max range mark free space only.
+// fusion's max range mark free space only. World coordinates in float (insert_points): for
+// maps far from the world origin use integrate_clouds, which keeps its precision.
 template <typename PointT>
 void insert_cloud(OccupancyFusion& fusion, const pcl::PointCloud<PointT>& cloud, const Eigen::Isometry3f& pose,
                   int threads = 0) {
@@ -89,6 +95,13 @@ void insert_cloud(OccupancyFusion& fusion, const pcl::PointCloud<PointT>& cloud,
 
 // Extends `bounds` by a cloud seen from `pose` (for fitting a grid before fusing).
 template <typename PointT>
+void add_cloud_bounds(ScanBounds& bounds, const pcl::PointCloud<PointT>& cloud, const Eigen::Isometry3d& pose,
+                      double max_range) {
+  detail::with_xyz(cloud, [&](const float* xyz, std::size_t n, std::size_t stride) {
+    bounds.add(pose, xyz, n, stride, max_range);
+  });
+}
+template <typename PointT>
 void add_cloud_bounds(ScanBounds& bounds, const pcl::PointCloud<PointT>& cloud, const Eigen::Isometry3f& pose,
                       double max_range) {
   detail::with_xyz(cloud, [&](const float* xyz, std::size_t n, std::size_t stride) {
@@ -98,14 +111,15 @@ void add_cloud_bounds(ScanBounds& bounds, const pcl::PointCloud<PointT>& cloud, 
 
 // Fuses clouds into a new grid with the options' model, voxel size and box (given or fitted to
 // all clouds and sensor origins). Each cloud uses its own pose unless options.sensor_pose is set.
-// Throws Error(invalid_argument) for bad options, Error(bad_value) if no point is finite.
+// Fused through ScanFusion: precise wherever the grid lies. Throws Error(invalid_argument) for
+// bad options, Error(bad_value) if no point is finite or the box or a sensor is out of range.
 template <typename PointT>
 Grid integrate_clouds(const std::vector<const pcl::PointCloud<PointT>*>& clouds, const ScanOptions& options) {
   options.validate();
   for (const auto* c : clouds)
     if (!c) throw Error(Status::invalid_argument, "null cloud pointer");
   auto pose_of = [&](const pcl::PointCloud<PointT>& c) {
-    return options.sensor_pose ? *options.sensor_pose : cloud_pose(c);
+    return options.sensor_pose ? *options.sensor_pose : cloud_pose_d(c);
   };
   GridFrame frame;
   if (options.bbox) {
@@ -115,15 +129,17 @@ Grid integrate_clouds(const std::vector<const pcl::PointCloud<PointT>*>& clouds,
     for (const auto* c : clouds) add_cloud_bounds(bounds, *c, pose_of(*c), options.model.max_range);
     frame = bounds.frame(options.voxel_size, options.margin);
   }
-  OccupancyFusion fusion(frame, options.model);
+  ScanFusion fusion(frame, options.model);
   std::size_t total = 0, before = 0;
   for (const auto* c : clouds) total += c->points.size();
-  attach_progress(fusion, options, &before, total);
+  attach_progress(fusion.fusion(), options, &before, total);
   for (const auto* c : clouds) {
-    insert_cloud(fusion, *c, pose_of(*c), options.threads);
+    detail::with_xyz(*c, [&](const float* xyz, std::size_t n, std::size_t stride) {
+      fusion.insert(pose_of(*c), xyz, n, stride, options.threads);
+    });
     before += c->points.size();
   }
-  if (!fusion.rays()) throw Error(Status::bad_value, "no finite point in the cloud(s)");
+  if (!fusion.fusion().rays()) throw Error(Status::bad_value, "no finite point in the cloud(s)");
   return fusion.grid();
 }
 

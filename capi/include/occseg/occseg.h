@@ -195,7 +195,10 @@ typedef enum {
  * NumPy can produce. Zero or overflowing dims (more than 2^40 voxels) fail with OCCSEG_EDIMS.
  * F32/F64 values must be probabilities in [0, 1]: the first voxel (x fastest) that is NaN,
  * infinite or out of range fails with OCCSEG_EVALUE naming it. voxel_size must be positive and
- * finite (OCCSEG_EVALUE). The origin starts at (0, 0, 0). */
+ * finite (OCCSEG_EVALUE). The origin starts at (0, 0, 0). A map's box must lie within 2^40
+ * voxels of the world origin, corners origin and origin + dims * voxel_size alike (beyond,
+ * voxel corners would round together or overflow to infinity): here, in the setters below and
+ * for every map read, OCCSEG_EVALUE "out of range" otherwise, so every map can be written. */
 OCCSEG_API int occseg_map_from_buffer(occseg_map **out, const void *data, occseg_dtype dtype,
                                       const size_t dims[3] /* nx, ny, nz */,
                                       const ptrdiff_t strides[3] /* bytes; NULL: dense, x fastest */,
@@ -209,9 +212,10 @@ OCCSEG_API int occseg_map_from_buffer_flags(occseg_map **out, const void *data, 
 /* Reads a map with the reader registered for the path's extension (see Plugins below): .npy
  * (float32, float64, uint8 or uint16, indexed [z, y, x] or [y, x], C or Fortran order; voxel
  * size 1, origin (0, 0, 0)), .nrrd (origin and voxel size in the file's own space, e.g. LPS,
- * which the map remembers for occseg_map_write), or what plugins add. OCCSEG_EIO if it cannot be read,
- * OCCSEG_EFORMAT if it is not a valid file, OCCSEG_EVALUE for bad probabilities,
- * OCCSEG_EUNSUPPORTED for an extension no reader handles. */
+ * which the map remembers for occseg_map_write), or what plugins add. OCCSEG_EIO if it cannot be
+ * read or is not a regular file (a FIFO, a device: refused before any read, so nothing blocks),
+ * OCCSEG_EFORMAT if it is not a valid file, OCCSEG_EVALUE for bad probabilities or a box out of
+ * range, OCCSEG_EUNSUPPORTED for an extension no reader handles. */
 OCCSEG_API int occseg_map_read(occseg_map **out, const char *path);
 
 /* Writes the map with the writer registered for the path's extension: .npy (float32 [z, y, x]),
@@ -228,11 +232,11 @@ OCCSEG_API void occseg_map_free(occseg_map *map);
 /* Dimensions nx, ny, nz. */
 OCCSEG_API int occseg_map_dims(const occseg_map *map, size_t dims[3]);
 
-/* Edge length of a voxel in metres (positive and finite). */
+/* Edge length of a voxel in metres (positive and finite; the box stays within range, see above). */
 OCCSEG_API int occseg_map_voxel_size(const occseg_map *map, double *out);
 OCCSEG_API int occseg_map_set_voxel_size(occseg_map *map, double voxel_size);
 
-/* World position of the outer corner of voxel (0, 0, 0) (finite). */
+/* World position of the outer corner of voxel (0, 0, 0) (finite; the box stays within range). */
 OCCSEG_API int occseg_map_origin(const occseg_map *map, double origin[3]);
 OCCSEG_API int occseg_map_set_origin(occseg_map *map, const double origin[3]);
 
@@ -381,7 +385,8 @@ OCCSEG_API int occseg_result_write(const occseg_result *result, const char *dir)
 
 /* Loads one plugin file (a shared object exporting occseg_plugin_entry). Fails with
  * OCCSEG_EPLUGIN, and a last-error text naming the file and the reason, when it cannot be
- * opened (with the dlerror() text), has no entry point, was built for another plugin ABI major
+ * opened (with the dlerror() text), is not a regular file (a FIFO, a device: refused before
+ * dlopen, which would wait for a FIFO's writer forever), has no entry point, was built for another plugin ABI major
  * or a newer minor, uses a plugin, stage, extension or parameter name that is already taken, or
  * its register function fails; the registry is then unchanged. */
 OCCSEG_API int occseg_plugins_load(const char *path);
@@ -390,7 +395,7 @@ OCCSEG_API int occseg_plugins_load(const char *path);
  * OCCSEG_PLUGIN_PATH (colon-separated), then the install's <libdir>/occseg/plugins (found
  * next to the loaded liboccseg, so relocated installs work, then at the configured prefix).
  * A plugin whose name is already loaded is skipped (the first in the path wins). All files are
- * tried; if any fails, returns OCCSEG_EPLUGIN with every failure in the last-error text.
+ * tried (a *.so that is not a regular file fails without being opened); if any fails, returns OCCSEG_EPLUGIN with every failure in the last-error text.
  * `loaded` (may be NULL) receives the number of plugins loaded by this call. */
 OCCSEG_API int occseg_plugins_load_default(uint32_t *loaded);
 

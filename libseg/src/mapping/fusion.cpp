@@ -296,6 +296,10 @@ GridFrame fit_frame(const std::vector<Vec3>& points, double voxel_size, double m
   std::size_t n[3];
   for (int k = 0; k < 3; ++k) {
     const double a = std::floor((lo[k] - margin) / voxel_size), b = std::floor((hi[k] + margin) / voxel_size) + 1;
+    // Far from the world origin b - a can round to 0 (floor(x) + 1 == floor(x)): out of range.
+    if (!(b - a >= 1))
+      throw Error(Status::bad_value, "points this far from the world origin are out of range for voxels of " +
+                                         std::to_string(voxel_size) + " m");
     if (!(b - a <= double(kMaxVoxels)))
       throw Error(Status::bad_dims, "points span " + std::to_string((b - a) * voxel_size) +
                                         " m: too many voxels of " + std::to_string(voxel_size) + " m");

@@ -61,6 +61,18 @@ std::string relocated_dir() {
   return dir_of(self) + "/" + OCCSEG_PLUGIN_DIR_FROM_LIB;
 }
 
+// dlopen() of a FIFO waits for a writer forever (every command loads the search path's plugins
+// first, --version included) and a device is no library: only regular files are opened. A path
+// without a '/' is a name for the loader's own search and is left to it.
+void check_plugin_file(const std::string& path) {
+  struct stat st {};
+  if (path.find('/') == std::string::npos || ::stat(path.c_str(), &st) != 0 || S_ISREG(st.st_mode)) return;
+  throw Error(Status::plugin, "plugin '" + path + "': cannot be loaded: " +
+                                  (S_ISDIR(st.st_mode)    ? "it is a directory"
+                                   : S_ISFIFO(st.st_mode) ? "it is not a regular file but a FIFO (named pipe)"
+                                                          : "it is not a regular file"));
+}
+
 // Closes a handle unless released (a failed load leaves nothing behind).
 struct Handle {
   void* h = nullptr;
@@ -86,6 +98,7 @@ std::vector<std::string> plugin_files(const std::string& dir) {
 
 std::string load_plugin(const std::string& path) {
   find_texture("");  // the built-ins first, so that a plugin cannot take their names
+  check_plugin_file(path);
   dlerror();
   Handle h;
   h.h = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
@@ -141,6 +154,12 @@ PluginLoadReport load_default_plugins() {
   for (const auto& dir : plugin_search_path()) {
     if (!is_dir(dir)) continue;
     for (const auto& file : plugin_files(dir)) {
+      try {
+        check_plugin_file(file);
+      } catch (const Error& e) {
+        report.errors.push_back(e.what());
+        continue;
+      }
       // Peek at the plugin's name first: one already loaded (e.g. the same plugin in an
       // earlier folder of the path) is skipped, not an error.
       void* h = dlopen(file.c_str(), RTLD_NOW | RTLD_LOCAL);
