@@ -25,6 +25,7 @@
 #include "stages/own_states.hpp"
 #include "util/parallel_pool.hpp"
 #include "pipeline/map_pass.hpp"
+#include "pipeline/label_scratch.hpp"
 #include "pipeline/segment_internal.hpp"
 
 namespace occseg {
@@ -129,14 +130,9 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   r.labels = std::move(labels);
   Stages st(params, r);
 
-  // The label array holds the stages' per-voxel scratch until the labelling writes the labels:
-  // the texture codes (bytes [0, 2n)) through the division, with the texture's LBP codes in
-  // [2n, 3n) while it runs; the refinement's bit masks take [0, 3n) once the codes are counted.
-  // The voxels' own states are bits (detail::OwnBits, 1/4 byte per voxel) in [3n, 4n) from the
-  // fused map pass through the rules; with a plugin's texture the creation writes them as
-  // bytes into [3n, 4n), packed into bits of the workspace. The array is allocated (or recycled)
-  // once and paged in once; separate arrays cost more allocations, zero-fills and page-ins.
-  // Peak: the labels and the states (5 bytes per voxel); a recycled array does not add to it.
+  // The label array holds the stages' per-voxel scratch until the labelling writes the labels
+  // (LabelScratch, label_scratch.hpp); with a plugin's texture the own states come as bytes and
+  // are packed into bits of the workspace.
   const std::size_t n = grid.dims.count();
   detail::check_labels_fit(n);  // before any stage allocates: the labels could not hold the result
   std::vector<Block> blocks;
@@ -164,23 +160,19 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
     // Fresh pages faulted in (and zeroed by the system) over the threads, not by whichever
     // stage first touches them; a recycled array's are in already and cost a write per page.
     touch_pages(r.labels.data(), n * sizeof(std::uint32_t), params.threads);
-    // codes in bytes [0, 2n), the operator's scratch (LBP codes) in [2n, 3n), own states as bits
-    std::uint8_t* const bytes = reinterpret_cast<std::uint8_t*>(r.labels.data());
-    const std::size_t at = (3 * n + 63) / 64 * 64;  // (the array starts on a page)
-    if (at + 2 * bit_words * sizeof(std::uint64_t) <= 4 * n) {
-      unknown = reinterpret_cast<detail::word_t*>(bytes + at);
-      occupied = unknown + bit_words;
+    const detail::LabelScratch scratch(r.labels, n);
+    if (detail::word_t* const bits = scratch.own_bits(bit_words)) {
+      unknown = bits;
+      occupied = bits + bit_words;
     } else {
       in_workspace();
     }
     rows.emplace(grid, nullptr, own_lo, own_hi, unknown, occupied, k.create);
     own_written = true;
     // The texture with the creation's reading of the map fused into its first pass (map_pass.hpp).
-    const int codes = detail::fused_map_pass(*op, grid, params, k, reinterpret_cast<std::uint16_t*>(bytes),
-                                             bytes + 2 * n, *rows);
+    const int codes = detail::fused_map_pass(*op, grid, params, k, scratch.codes(), scratch.texture_scratch(), *rows);
     st.begin("division");
-    blocks = detail::divide_codes(grid, reinterpret_cast<const detail::code_t*>(r.labels.data()), codes, params,
-                                  /*faces_only=*/true, k);
+    blocks = detail::divide_codes(grid, scratch.codes(), codes, params, /*faces_only=*/true, k);
   } else {  // a plugin's codes come in their own array: the label array waits for it to go
     TextureMap tex = run_texture(grid, params);
     st.begin("division");
@@ -193,11 +185,12 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   own.unknown = unknown;
   own.occupied = occupied;
   st.begin("creation");
-  std::uint8_t* const scratch = reinterpret_cast<std::uint8_t*>(r.labels.data());
+  const detail::LabelScratch label_scratch(r.labels, n);
+  std::uint8_t* const scratch = label_scratch.refinement();
   // The growth's masks go where it keeps them (the label array's first bytes, free once the
   // codes are counted), written by the creation if it can (GrowthRows: fused into its writing of
   // the states, from its cells' states).
-  const std::size_t room = 3 * n;
+  const std::size_t room = label_scratch.refinement_bytes();
   std::vector<std::uint8_t> occupied_rows(grid.dims.ny * grid.dims.nz);
   detail::GrowthRows growth;
   growth.scratch = scratch;
@@ -205,7 +198,7 @@ Result segment_into(const Grid& grid, const Params& params, bool keep_stages, La
   growth.occupied_rows = occupied_rows.data();
   growth.defer_states = !keep_stages;  // (the created states are kept as they were created)
   const bool prefill = own_written && room >= detail::grow_unknown_scratch_bytes(grid.dims);
-  std::uint8_t* const own_bytes = own_written ? nullptr : scratch + 3 * n;  // (a plugin's texture)
+  std::uint8_t* const own_bytes = own_written ? nullptr : label_scratch.own_bytes();  // (a plugin's texture)
   UninitVector<std::uint8_t> states = detail::create_segments_and_own_states(
       grid, blocks, params, own_bytes, rows ? &*rows : nullptr, prefill ? &growth : nullptr, k);
   rows.reset();
