@@ -1,8 +1,7 @@
 // Vectors whose new elements are left uninitialised (default-initialised) instead of zeroed.
 // The per-voxel arrays of a segmentation (the label array, 4 bytes per voxel) are written in full
-// by the stages that fill them, in parallel; std::vector's value-initialisation zeroed them first
-// in one serial pass that also took every page fault (5-6 ms of a 320 x 320 x 128 call on two
-// threads, docs/performance.md "Sixth round").
+// by the stages that fill them, in parallel; std::vector's value-initialisation would zero them
+// first in one serial pass that also takes every page fault (docs/performance.md, "Memory and pages").
 #pragma once
 #include <cstddef>
 #include <cstdint>

@@ -1,3 +1,4 @@
+// occseg::Context: the caller-owned thread pool and recycled results (context.hpp).
 #include "occseg/context.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// occseg::Grid and the checks of a map's dims and values (grid.hpp).
 #include "occseg/grid.hpp"
 
 #include <cmath>

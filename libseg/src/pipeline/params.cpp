@@ -1,3 +1,4 @@
+// occseg::Params: the presets, validation, and parameters by name (params.hpp).
 #include "occseg/params.hpp"
 
 #include <cerrno>

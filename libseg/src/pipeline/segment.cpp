@@ -1,3 +1,4 @@
+// The whole pipeline (segment.hpp): the order of the stages, their timings, progress and cancel.
 #include "occseg/segment.hpp"
 
 #include <algorithm>
@@ -100,7 +101,7 @@ void check_map(const Grid& grid, int threads, bool values, const kernels::Table&
 
 Result segment(const Grid& grid, const Params& params, bool keep_stages) {
   // Without a caller's context, one pool for this call: its 20-odd parallel loops would otherwise
-  // each start their threads (about 40 us per loop, bench/bench_pipeline.cpp's
+  // each start their threads (measured by bench/bench_pipeline.cpp's
   // BM_ParallelForDispatch). The call stays self-contained: the pool ends with it.
   // (No Workspace: the call's bit arrays are freed before the labelling's peak, as without a pool.)
   params.validate();

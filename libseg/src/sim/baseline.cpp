@@ -1,3 +1,5 @@
+// The naive baseline of the experiments: per-voxel thresholds and connected components
+// (baseline.hpp).
 #include "occseg/sim/baseline.hpp"
 
 #include <chrono>

@@ -1,3 +1,4 @@
+// Scores of a segmentation against a simulated scene's ground truth (metrics.hpp).
 #include "occseg/sim/metrics.hpp"
 
 #include <algorithm>

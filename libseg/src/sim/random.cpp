@@ -1,3 +1,4 @@
+// The simulator's random numbers (random.hpp).
 #include "occseg/sim/random.hpp"
 
 #include <cmath>

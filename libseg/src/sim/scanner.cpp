@@ -1,3 +1,4 @@
+// The simulated range sensor and its scans fused into a map (scanner.hpp).
 #include "occseg/sim/scanner.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The simulated scenes of the experiments (scene.hpp).
 #include "occseg/sim/scene.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The shapes of the simulated objects (shapes.hpp).
 #include "occseg/sim/shapes.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The ground truth of a simulated scene (truth.hpp).
 #include "occseg/sim/truth.hpp"
 
 #include <cmath>

@@ -1,3 +1,4 @@
+// Per-voxel buffers on 2 MB pages where the system allows it (huge_pages.hpp).
 #include "util/huge_pages.hpp"
 
 #include <algorithm>

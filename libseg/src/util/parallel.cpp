@@ -1,3 +1,5 @@
+// parallel_for and parallel_for_dynamic: on the calling thread's context when one is installed,
+// else on threads of their own.
 #include "occseg/parallel.hpp"
 
 #include "util/parallel_pool.hpp"

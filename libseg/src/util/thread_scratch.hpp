@@ -1,9 +1,8 @@
 // Scratch arrays that threads allocate for themselves inside a parallel loop (internal). Two such
 // arrays can be neighbours on the heap, and a cache line holding the end of one and the start of
-// the other, written by both threads, moves between the cores at every write: the texture's first
-// pass ran 13 % slower in a build whose heap happened to put the two threads' step lists side by
-// side (docs/performance.md, "Seventh round"). A ThreadScratch keeps a cache line of padding on
-// both sides of its elements.
+// the other, written by both threads, moves between the cores at every write (false sharing;
+// docs/performance.md, "Thread pool and kernels"). A ThreadScratch keeps a cache line of padding on both sides
+// of its elements.
 #pragma once
 #include <cstddef>
 #include <vector>
