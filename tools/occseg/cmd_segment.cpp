@@ -1,6 +1,7 @@
 // `occseg segment IN --out DIR`: segment a map (.npy .nrrd .pcd .graph .bt .ot, see map_input)
 // and write labels.npy, labels.nrrd, segments.json and segmentation.png, plus map.nrrd for inputs
-// that were not grids and segments.pcd for point clouds; then a summary on stdout (text or
+// that were not grids, segments.pcd for point clouds and segmentation.pgm + segmentation.yaml (a
+// map_server map) for 2D maps (nz = 1); then a summary on stdout (text or
 // --json). All outputs or none: a failure or Ctrl-C removes what was written.
 #include <chrono>
 #include <iostream>
@@ -11,6 +12,7 @@
 #include "commands.hpp"
 #include "occseg/error.hpp"
 #include "occseg/file_write.hpp"
+#include "occseg/map_yaml.hpp"
 #include "occseg/npy.hpp"
 #include "occseg/nrrd.hpp"
 #include "occseg/segment.hpp"
@@ -69,6 +71,13 @@ int run(const SegmentArgs& o) {
     files.emplace_back("map.nrrd", [&](const std::string& f) { write_grid_nrrd(f, grid); });
   if (input.kind == InputKind::cloud && have_pcl())
     files.emplace_back("segments.pcd", [&](const std::string& f) { write_cloud_output(f, grid, r); });
+  std::vector<std::uint8_t> states;
+  if (grid.dims.nz == 1) {  // a 2D map: also as the PGM/YAML pair map_server (a 2D planner) loads
+    states = voxel_states(r);
+    files.emplace_back("segmentation.pgm", [&](const std::string& f) { write_state_pgm(f, grid.dims, states); });
+    files.emplace_back("segmentation.yaml",
+                       [&](const std::string& f) { write_map_yaml(f, "segmentation.pgm", grid); });
+  }
   files.emplace_back("segments.json", [&](const std::string& f) {
     const std::string text = segments_json(r, preset).dump(1) + "\n";
     write_file_atomically(f, [&](std::ostream& s) { s << text; });
@@ -108,8 +117,8 @@ Runner add_segment(CLI::App& app) {
   auto o = std::make_shared<SegmentArgs>();
   CLI::App* c = app.add_subcommand("segment", "Segment a probabilistic occupancy map; write labels, segments, a picture");
   c->add_option("input", o->input,
-                "map file: .npy/.nrrd grid (float32/float64/uint8/uint16), .pcd cloud, .graph OctoMap scan graph, "
-                ".bt/.ot OctoMap tree")
+                "map file: .npy/.nrrd grid (float32/float64/uint8/uint16), .yaml map_server 2D map, .pcd cloud, "
+                ".graph OctoMap scan graph, .bt/.ot OctoMap tree")
       ->required();
   c->add_option("--out,-o", o->out_dir, "output directory (created if missing)")->required();
   add_pipeline_options(c, o->pipeline);

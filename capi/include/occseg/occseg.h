@@ -176,8 +176,20 @@ OCCSEG_API int occseg_param_find(const char *name, uint32_t *index);
  * length and the world position of the outer corner of voxel (0, 0, 0). */
 typedef struct occseg_map occseg_map;
 
-/* Element type of a caller's buffer. U8 and U16 map 0..max onto 0..1. */
-typedef enum { OCCSEG_F32 = 0, OCCSEG_F64 = 1, OCCSEG_U8 = 2, OCCSEG_U16 = 3 } occseg_dtype;
+/* Element type of a caller's buffer. U8 and U16 map 0..max onto 0..1. I8_OCCUPANCY is the int8
+ * cell of a ROS nav_msgs/OccupancyGrid (and of a map_server map once loaded): -1 is unknown
+ * (p = 0.5), 0..100 is the occupancy in percent (p = v / 100); any other value fails with
+ * OCCSEG_EVALUE naming the first such cell. An OccupancyGrid's `data` is row-major with x
+ * fastest and row 0 at the grid's origin, which is occseg's own layout: pass it as it is, with
+ * dims {width, height, 1}, voxel_size = info.resolution and the origin's position (a map whose
+ * origin is rotated about z is not an axis-aligned grid). The values are pinned. */
+typedef enum {
+  OCCSEG_F32 = 0,
+  OCCSEG_F64 = 1,
+  OCCSEG_U8 = 2,
+  OCCSEG_U16 = 3,
+  OCCSEG_I8_OCCUPANCY = 4
+} occseg_dtype;
 
 /* Flags of occseg_map_from_buffer_flags (bitwise or). */
 typedef enum {
@@ -194,7 +206,8 @@ typedef enum {
  * overflows fail with OCCSEG_EINVAL; axes ordered by |stride| must nest, as in every view
  * NumPy can produce. Zero or overflowing dims (more than 2^40 voxels) fail with OCCSEG_EDIMS.
  * F32/F64 values must be probabilities in [0, 1]: the first voxel (x fastest) that is NaN,
- * infinite or out of range fails with OCCSEG_EVALUE naming it. voxel_size must be positive and
+ * infinite or out of range fails with OCCSEG_EVALUE naming it; likewise an I8_OCCUPANCY cell
+ * outside -1..100 (the flags do not apply to it). voxel_size must be positive and
  * finite (OCCSEG_EVALUE). The origin starts at (0, 0, 0). */
 OCCSEG_API int occseg_map_from_buffer(occseg_map **out, const void *data, occseg_dtype dtype,
                                       const size_t dims[3] /* nx, ny, nz */,
