@@ -48,15 +48,18 @@ class YamlReader {
     return s.substr(a, b - a);
   }
 
-  // The line without its comment: '#' at the start or after a blank, outside quotes.
+  // The line without its comment: '#' at the start or after a blank, outside quotes. A quote
+  // opens a quoted scalar only where a value starts (after ':', '-', '[', ',' or at the start);
+  // inside a plain scalar (it's.pgm) it is an ordinary character.
   std::string uncomment(const std::string& s, std::size_t line) const {
     char quote = 0;
     for (std::size_t i = 0; i < s.size(); ++i) {
       const char c = s[i];
       if (quote) {
         if (c == '\\' && quote == '"') ++i;
+        else if (c == '\'' && quote == '\'' && i + 1 < s.size() && s[i + 1] == '\'') ++i;  // '' inside '...'
         else if (c == quote) quote = 0;
-      } else if (c == '\'' || c == '"') {
+      } else if ((c == '\'' || c == '"') && value_starts(s, i)) {
         quote = c;
       } else if (c == '#' && (i == 0 || blank(s[i - 1]))) {
         return s.substr(0, i);
@@ -64,6 +67,11 @@ class YamlReader {
     }
     if (quote) fail(line, "unterminated quoted string");
     return s;
+  }
+
+  static bool value_starts(const std::string& s, std::size_t i) {
+    while (i > 0 && blank(s[i - 1])) --i;
+    return i == 0 || s[i - 1] == ':' || s[i - 1] == '-' || s[i - 1] == '[' || s[i - 1] == ',';
   }
 
   // A scalar: quoted ('it''s', "a \"b\"") or plain. Plain scalars that would start a YAML

@@ -215,6 +215,11 @@ TEST(MapServer, YamlSubsetVariantsMapServerFilesUse) {
     put(d + "/room.yaml", text);
     EXPECT_EQ(read_map_yaml(d + "/room.yaml").p, ref.p) << text;
   }
+  // A quote inside a plain scalar is an ordinary character, not an opening quote.
+  fs::copy_file(d + "/room.pgm", d + "/o'room.pgm", fs::copy_options::overwrite_existing);
+  put(d + "/q.yaml", "image: o'room.pgm  # it's ours\nresolution: 0.05\norigin: [-1.5, 2.25, 0]\nnegate: 0\n"
+                     "occupied_thresh: 0.65\nfree_thresh: 0.196\n");
+  EXPECT_EQ(read_map_yaml(d + "/q.yaml").p, ref.p);
   // An absolute image path is used as it is.
   put(d + "/abs.yaml", "image: " + fs::absolute(d + "/room.pgm").string() + "\nresolution: 0.05\norigin: [-1.5, 2.25, 0]\n"
                        "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n");
