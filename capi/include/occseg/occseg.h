@@ -221,7 +221,10 @@ OCCSEG_API int occseg_map_from_buffer_flags(occseg_map **out, const void *data, 
 
 /* Reads a map with the reader registered for the path's extension (see Plugins below): .npy
  * (float32, float64, uint8 or uint16, indexed [z, y, x] or [y, x], C or Fortran order; voxel
- * size 1, origin (0, 0, 0)), .nrrd, or what plugins add. OCCSEG_EIO if it cannot be read,
+ * size 1, origin (0, 0, 0)), .nrrd, .yaml (a ROS map_server / Nav2 2D map: the PGM image it
+ * names, its resolution and origin; cells as map_server makes them, then p as for
+ * OCCSEG_I8_OCCUPANCY; an origin yaw other than 0 fails with OCCSEG_EUNSUPPORTED), or what
+ * plugins add. OCCSEG_EIO if it cannot be read,
  * OCCSEG_EFORMAT if it is not a valid file, OCCSEG_EVALUE for bad probabilities,
  * OCCSEG_EUNSUPPORTED for an extension no reader handles. */
 OCCSEG_API int occseg_map_read(occseg_map **out, const char *path);
@@ -359,7 +362,7 @@ OCCSEG_API int occseg_result_write(const occseg_result *result, const char *dir)
 /* Plugins add texture operators, histogram similarities, map readers/writers (by file
  * extension) and parameters at run time; occseg_plugin.h is the ABI they are written against and
  * docs/plugins.md explains it. The built-in stages are registered the same way, as the plugins
- * "builtin" (texture lbp6, lbp8; similarity g, chi2) and "builtin_io" (.npy, .nrrd).
+ * "builtin" (texture lbp6, lbp8; similarity g, chi2) and "builtin_io" (.npy, .nrrd; .yaml read).
  *
  * Thread safety: loading is serialised and transactional (a plugin's stages and parameters
  * appear all at once, or not at all if it fails), and loaded plugins are never unloaded, so
@@ -420,7 +423,8 @@ OCCSEG_API const char *occseg_param_plugin(uint32_t index);
 OCCSEG_API int occseg_param_default(uint32_t index, char *buf, size_t size, size_t *length);
 
 /* occseg_map_read / occseg_map_write pick the reader or writer registered for the path's last
- * extension (case-insensitive): built in are .npy and .nrrd, plugins add others (.pcd, .bt, ...).
+ * extension (case-insensitive): built in are .npy and .nrrd (and the reader .yaml), plugins add
+ * others (.pcd, .bt, ...).
  * An extension nobody handles fails with OCCSEG_EUNSUPPORTED naming it. These variants pass
  * reader/writer options: NULL or a NULL-terminated array of "key=value" texts (see the reader's
  * documentation; unknown keys fail). */
