@@ -1,12 +1,14 @@
-// The built-in map readers and writers (.npy, .nrrd), registered as the plugin "builtin_io"
-// through the plugin host table when the program or library holding this object starts, so
-// that occseg_map_read / occseg_map_write find them by extension like any plugin's.
+// The built-in map readers and writers (.npy, .nrrd; map_server .yaml maps are read only),
+// registered as the plugin "builtin_io" through the plugin host table when the program or library
+// holding this object starts, so that occseg_map_read / occseg_map_write find them by extension
+// like any plugin's.
 #include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <string>
 
 #include "occseg/error.hpp"
+#include "occseg/map_yaml.hpp"
 #include "occseg/npy.hpp"
 #include "occseg/nrrd.hpp"
 #include "occseg/occseg_plugin.h"
@@ -89,6 +91,13 @@ int read_nrrd_map(const occseg_plugin_call* call, const char* path, const char* 
   });
 }
 
+int read_yaml_map(const occseg_plugin_call* call, const char* path, const char* const* options, occseg_plugin_map_sink* sink) {
+  return guarded(call, [&] {
+    voxel_size_option(path, options, false);
+    deliver(call, sink, occseg::read_map_yaml(path));
+  });
+}
+
 int write_npy_map(const occseg_plugin_call* call, const char* path, const occseg_plugin_grid* grid, const char* const* options) {
   return guarded(call, [&] {
     voxel_size_option(path, options, false);
@@ -108,6 +117,9 @@ int register_io(const occseg_plugin_host* host, occseg_plugin_registrar* r) {
       {sizeof(occseg_plugin_reader), ".npy", "NumPy array [z, y, x] or [y, x]: f4, f8, u1, u2 (option voxel_size, default 1)",
        read_npy_map, nullptr},
       {sizeof(occseg_plugin_reader), ".nrrd", "NRRD volume (raw or ascii) with its spacing and origin", read_nrrd_map, nullptr},
+      {sizeof(occseg_plugin_reader), ".yaml",
+       "ROS map_server / Nav2 2D map: YAML with a PGM image (P5 8/16-bit, P2), resolution, origin, thresholds",
+       read_yaml_map, nullptr},
   };
   const occseg_plugin_writer writers[] = {
       {sizeof(occseg_plugin_writer), ".npy", "float32 NumPy array [z, y, x]", write_npy_map, nullptr},
@@ -122,7 +134,7 @@ int register_io(const occseg_plugin_host* host, occseg_plugin_registrar* r) {
 
 const occseg_plugin_descriptor kBuiltinIo = {
     OCCSEG_PLUGIN_ABI_MAJOR, OCCSEG_PLUGIN_ABI_MINOR, sizeof(occseg_plugin_descriptor), "builtin_io",
-    OCCSEG_VERSION_STRING, "built-in map readers and writers (.npy, .nrrd)", register_io};
+    OCCSEG_VERSION_STRING, "built-in map readers and writers (.npy, .nrrd; .yaml read)", register_io};
 
 // Registered when the binary holding this object is loaded (before main / dlopen returns).
 [[maybe_unused]] const bool kRegistered = (occseg::register_static_plugin(&kBuiltinIo), true);

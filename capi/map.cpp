@@ -8,6 +8,7 @@
 
 #include "internal.hpp"
 #include "occseg/geometry.hpp"
+#include "occseg/map_yaml.hpp"
 #include "occseg/npy.hpp"
 
 using occseg::Dims;
@@ -26,7 +27,8 @@ std::size_t item_size(int dtype) {
     case OCCSEG_F64: return 8;
     case OCCSEG_U8: return 1;
     case OCCSEG_U16: return 2;
-    default: invalid("dtype " + std::to_string(dtype) + " is not an occseg_dtype (OCCSEG_F32 .. OCCSEG_U16)");
+    case OCCSEG_I8_OCCUPANCY: return 1;
+    default: invalid("dtype " + std::to_string(dtype) + " is not an occseg_dtype (OCCSEG_F32 .. OCCSEG_I8_OCCUPANCY)");
   }
 }
 
@@ -93,6 +95,15 @@ float probability(double v, uint32_t flags, std::size_t x, std::size_t y, std::s
   bad_value(x, y, z, v);
 }
 
+// One nav_msgs/OccupancyGrid cell, converted as the map_server reader converts its cells.
+float occupancy(int8_t v, std::size_t x, std::size_t y, std::size_t z) {
+  float p;
+  if (occseg::occupancy_cell_probability(v, p)) return p;
+  throw Error(Status::bad_value, "data: OccupancyGrid cell (" + std::to_string(x) + ", " + std::to_string(y) + ", " +
+                                     std::to_string(z) + ") = " + std::to_string(v) +
+                                     " is neither -1 (unknown) nor an occupancy in 0..100");
+}
+
 void convert(occseg::Grid& g, const char* base, int dtype, const ptrdiff_t s[3], uint32_t flags) {
   const Dims& d = g.dims;
   float* out = g.p.data();
@@ -106,6 +117,7 @@ void convert(occseg::Grid& g, const char* base, int dtype, const ptrdiff_t s[3],
           case OCCSEG_F64: *out = probability(load<double>(e), flags, x, y, z); break;
           // Same conversion as the .npy reader, so both paths give identical maps.
           case OCCSEG_U8: *out = static_cast<float>(load<uint8_t>(e) / 255.0); break;
+          case OCCSEG_I8_OCCUPANCY: *out = occupancy(load<int8_t>(e), x, y, z); break;
           default: *out = static_cast<float>(load<uint16_t>(e) / 65535.0); break;
         }
       }

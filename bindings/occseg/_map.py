@@ -9,8 +9,11 @@ from ._handles import Owned
 from ._lib import c_double3, c_ptrdiff3, c_size3, has, lib
 from ._text import option_array
 
-# occseg_dtype of each accepted element type (native byte order).
-_DTYPES = {np.dtype(np.float32): 0, np.dtype(np.float64): 1, np.dtype(np.uint8): 2, np.dtype(np.uint16): 3}
+# occseg_dtype of each accepted element type (native byte order). int8 is read as a ROS
+# nav_msgs/OccupancyGrid (OCCSEG_I8_OCCUPANCY: -1 unknown, 0..100 percent): no other int8 map
+# convention exists, and it is the one type such a grid comes in.
+_DTYPES = {np.dtype(np.float32): 0, np.dtype(np.float64): 1, np.dtype(np.uint8): 2, np.dtype(np.uint16): 3,
+           np.dtype(np.int8): 4}
 _IMPORT_CLAMP, _IMPORT_NAN_UNKNOWN = 1, 2
 _EMPTY = ctypes.c_char(0)  # a valid address for zero-size arrays, so the C ABI reports their dims
 
@@ -23,7 +26,7 @@ def as_voxel_array(probabilities, who):
         arr = arr.astype(arr.dtype.newbyteorder("="))  # big-endian data: the C ABI reads native
     if arr.dtype not in _DTYPES:
         raise OccsegError(Status.EINVAL, f"{who}: probabilities: dtype {arr.dtype} is not supported "
-                                         "(use float32, float64, uint8 or uint16)")
+                                         "(use float32, float64, uint8 or uint16; int8 for a ROS OccupancyGrid)")
     if arr.ndim not in (2, 3):
         raise OccsegError(Status.EDIMS, f"{who}: probabilities: shape {arr.shape} has {arr.ndim} dimensions; "
                                         "expected 3 ([z, y, x]) or 2 ([y, x])")
@@ -64,7 +67,14 @@ class Map(Owned):
         """Copies a NumPy array indexed [z, y, x] (or [y, x] for a one-layer map) of float32,
         float64, uint8 or uint16 (0..max meaning 0..1) into a new map, reading it in place through
         its strides. Float values must lie in [0, 1] unless `clamp` (out-of-range values and
-        infinities go to the nearest bound) or `nan_unknown` (NaN becomes 0.5) is set."""
+        infinities go to the nearest bound) or `nan_unknown` (NaN becomes 0.5) is set.
+
+        An int8 array is a ROS nav_msgs/OccupancyGrid: -1 is unknown (p = 0.5), 0..100 the
+        occupancy in percent (p = v / 100), anything else raises OccsegError (EVALUE) naming the first
+        such cell (clamp and nan_unknown do not apply). Pass the message's data as it is,
+        np.asarray(msg.data, dtype=np.int8).reshape(msg.info.height, msg.info.width) (row 0 is at
+        the origin, y up, as occseg's rows are), with voxel_size=msg.info.resolution and
+        origin=(position.x, position.y, 0)."""
         arr = as_voxel_array(probabilities, "occseg_map_from_buffer")
         vs = real("occseg.Map.from_array", "voxel_size", voxel_size)
         o = None if origin is None else _origin_arg("occseg.Map.from_array", origin)

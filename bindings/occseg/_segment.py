@@ -48,7 +48,8 @@ def segment(probabilities, preset="default", threads=0, *, voxel_size=None, orig
     """Segments a probabilistic occupancy map into free, unknown and occupied segments.
 
     probabilities: NumPy array indexed [z, y, x] (or [y, x]) of float32, float64, uint8 or uint16
-        (0..max meaning 0..1), any strides: it is read in place, not copied. Or an occseg.Map.
+        (0..max meaning 0..1), or int8 read as a ROS OccupancyGrid (-1 unknown, 0..100 percent;
+        see Map.from_array), any strides: it is read in place, not copied. Or an occseg.Map.
     preset: "default" (paper plus per-voxel safety rules) or "paper" (as published).
     threads: worker threads, 0 = all cores; results never depend on it.
     voxel_size, origin: of an array input (default 1 and (0, 0, 0)); a Map carries its own.

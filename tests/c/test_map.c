@@ -89,6 +89,8 @@ static void argument_errors(void **state) {
   EXPECT_FAIL(occseg_map_from_buffer(&m, p, OCCSEG_F32, NULL, NULL, 1.0), OCCSEG_EINVAL, "'dims'");
   EXPECT_FAIL(occseg_map_from_buffer(&m, p, (occseg_dtype)7, k444, NULL, 1.0), OCCSEG_EINVAL,
               "dtype 7 is not an occseg_dtype");
+  EXPECT_FAIL(occseg_map_from_buffer(&m, p, (occseg_dtype)5, k444, NULL, 1.0), OCCSEG_EINVAL,
+              "dtype 5 is not an occseg_dtype (OCCSEG_F32 .. OCCSEG_I8_OCCUPANCY)");
   EXPECT_FAIL(occseg_map_from_buffer(&m, p, (occseg_dtype)-1, k444, NULL, 1.0), OCCSEG_EINVAL, "dtype -1");
   EXPECT_FAIL(occseg_map_from_buffer(&m, p, OCCSEG_F32, zero, NULL, 1.0), OCCSEG_EDIMS, "4 x 0 x 4 have a zero");
   EXPECT_FAIL(occseg_map_from_buffer(&m, p, OCCSEG_F32, huge, NULL, 1.0), OCCSEG_EDIMS, "exceed the limit of 2^40");
@@ -168,6 +170,86 @@ static void bad_values_name_the_first_voxel(void **state) {
   assert_int_equal(occseg_map_values(m, out, 64), OCCSEG_OK);
   assert_true(out[5] == 1.0f);
   occseg_map_free(m);
+}
+
+/* A ROS nav_msgs/OccupancyGrid as it comes (int8, -1 unknown, 0..100 percent, row 0 at the
+ * origin): a room of 40 x 30 cells, unknown outside, a wall of 100, free inside (0 and some 5 %
+ * cells) and a box of 90 near the largest y. */
+static void occupancy_grid_room(int8_t *cells) {
+  size_t x, y;
+  for (y = 0; y < 30; ++y)
+    for (x = 0; x < 40; ++x) {
+      int8_t v = -1;
+      if (x >= 3 && x <= 36 && y >= 2 && y <= 27) v = (x == 3 || x == 36 || y == 2 || y == 27) ? 100 : ((x * y) % 7 ? 0 : 5);
+      if (x >= 10 && x < 16 && y >= 20 && y < 24) v = 90;
+      cells[y * 40 + x] = v;
+    }
+}
+
+static void occupancy_grid_segments(void **state) {
+  static int8_t cells[40 * 30];
+  const size_t dims[3] = {40, 30, 1};
+  const double origin[3] = {-2.0, -1.5, 0.0};
+  occseg_map *m = NULL;
+  occseg_result *r = NULL;
+  occseg_params *p = NULL;
+  float values[40 * 30];
+  uint32_t i, counts[3] = {0, 0, 0};
+  char texture[16];
+  occseg_segment_info box = {0};
+  (void)state;
+  occupancy_grid_room(cells);
+  assert_int_equal(occseg_map_from_buffer(&m, cells, OCCSEG_I8_OCCUPANCY, dims, NULL, 0.05), OCCSEG_OK);
+  assert_int_equal(occseg_map_set_origin(m, origin), OCCSEG_OK);
+  assert_int_equal(occseg_map_values(m, values, 40 * 30), OCCSEG_OK);
+  assert_true(values[0] == 0.5f && values[2 * 40 + 3] == 1.0f && values[21 * 40 + 12] == 0.9f);
+  assert_true(values[5 * 40 + 5] == 0.0f && values[7 * 40 + 4] == (float)(5 / 100.0));
+  assert_int_equal(occseg_params_create(&p), OCCSEG_OK);
+  assert_int_equal(occseg_params_get_string(p, "texture", texture, sizeof texture, NULL), OCCSEG_OK);
+  assert_string_equal(texture, "auto"); /* lbp8 on this one-layer map */
+  assert_int_equal(occseg_segment(&r, m, p), OCCSEG_OK);
+  for (i = 0; i < occseg_result_segment_count(r); ++i) {
+    occseg_segment_info s = {0};
+    s.struct_size = sizeof s;
+    assert_int_equal(occseg_result_segment(r, i, &s), OCCSEG_OK);
+    counts[s.state]++;
+    if (s.state == OCCSEG_OCCUPIED && s.voxels == 24) box = s;
+  }
+  assert_int_equal(counts[OCCSEG_FREE], 1);
+  assert_int_equal(counts[OCCSEG_UNKNOWN], 1);
+  assert_int_equal(counts[OCCSEG_OCCUPIED], 2); /* the wall and the box */
+  assert_int_equal(box.voxels, 24);
+  assert_true(box.bbox_min[0] == 10 && box.bbox_max[0] == 15 && box.bbox_min[1] == 20 && box.bbox_max[1] == 23);
+  occseg_result_free(r);
+  occseg_params_free(p);
+  occseg_map_free(m);
+
+  /* Read through strides: the same grid stored top row first (as an image) and flipped back. */
+  {
+    static int8_t flipped[40 * 30];
+    const ptrdiff_t strides[3] = {1, -40, 0};
+    float again[40 * 30];
+    size_t y;
+    for (y = 0; y < 30; ++y) memcpy(flipped + (29 - y) * 40, cells + y * 40, 40);
+    assert_int_equal(occseg_map_from_buffer(&m, flipped + 29 * 40, OCCSEG_I8_OCCUPANCY, dims, strides, 0.05), OCCSEG_OK);
+    assert_int_equal(occseg_map_values(m, again, 40 * 30), OCCSEG_OK);
+    assert_memory_equal(again, values, sizeof values);
+    occseg_map_free(m);
+  }
+
+  /* Any value but -1 and 0..100 fails, naming the first such cell (x fastest); no flag accepts it. */
+  cells[29 * 40 + 39] = -2;
+  cells[12 * 40 + 7] = 101;
+  EXPECT_FAIL(occseg_map_from_buffer(&m, cells, OCCSEG_I8_OCCUPANCY, dims, NULL, 0.05), OCCSEG_EVALUE,
+              "OccupancyGrid cell (7, 12, 0) = 101 is neither -1 (unknown) nor an occupancy in 0..100");
+  assert_null(m);
+  EXPECT_FAIL(occseg_map_from_buffer_flags(&m, cells, OCCSEG_I8_OCCUPANCY, dims, NULL, 0.05,
+                                           OCCSEG_IMPORT_CLAMP | OCCSEG_IMPORT_NAN_UNKNOWN),
+              OCCSEG_EVALUE, "(7, 12, 0) = 101");
+  cells[12 * 40 + 7] = -128;
+  EXPECT_FAIL(occseg_map_from_buffer(&m, cells, OCCSEG_I8_OCCUPANCY, dims, NULL, 0.05), OCCSEG_EVALUE,
+              "cell (7, 12, 0) = -128");
+  assert_null(m);
 }
 
 static void npy_files(void **state) {
@@ -273,6 +355,7 @@ int run_map_tests(void) {
       cmocka_unit_test(argument_errors),
       cmocka_unit_test(out_of_memory_is_reported),
       cmocka_unit_test(bad_values_name_the_first_voxel),
+      cmocka_unit_test(occupancy_grid_segments),
       cmocka_unit_test(npy_files),
       cmocka_unit_test(nrrd_files_keep_their_space),
   };

@@ -40,7 +40,7 @@ for sub in SUBCOMMANDS:
 for sub in ("segment", "demo", "info"):
     r = run(sub, "--help")
     for text in ("--preset", "--param", "--threads", "--json", "--quiet", "smax (int, default 64",
-                 "free_below (double, default 0.498", "texture (string, default lbp6)"):
+                 "free_below (double, default 0.498", "texture (string, default auto)"):
         assert text in r.stdout, (sub, text)
 
 # Usage errors: exit 1, one line naming the problem.

@@ -111,6 +111,7 @@ TEST(Reference, WholePipelineMatchesForBothPresets) {
   for (const Case& c : kCases) {
     const Grid g = test::random_map(c.dims, c.seed, c.noise);
     for (Params p : {Params::paper(), Params::defaults()}) {
+      p.texture = "lbp6";  // the reference's operator, also for the 2D case (whose default is lbp8)
       const reference::Output ref = reference::segment(g, p);
       for (int t : {1, 2, 3}) {
         p.threads = t;

@@ -219,9 +219,55 @@ TEST(Similarity, DivisionUsesTheNamedOne) {
   ASSERT_EQ(rc.segments.size(), 2u);
 }
 
+bool same_blocks(const Result& a, const Result& b) {
+  if (a.blocks.size() != b.blocks.size()) return false;
+  for (std::size_t i = 0; i < a.blocks.size(); ++i)
+    for (int k = 0; k < 3; ++k)
+      if (a.blocks[i].lo[k] != b.blocks[i].lo[k] || a.blocks[i].hi[k] != b.blocks[i].hi[k]) return false;
+  return true;
+}
+
+// Issue 26: a 2D map (nz = 1) gets lbp8, the operator of the authors' 2D method, unless the
+// texture is set; 3D maps keep lbp6. The division (its blocks) shows which operator ran.
+TEST(Lbp8, IsTheDefaultTextureOfA2DMapInBothPresets) {
+  // Coarse noise with two patches of other textures: a denser one and a two-level one.
+  Grid flat = random_grid(Dims{64, 64, 1}, 7);
+  std::mt19937 rng(11);
+  for (std::size_t y = 0; y < 64; ++y)
+    for (std::size_t x = 0; x < 64; ++x) {
+      float& v = flat.at(x, y, 0);
+      v = v * 0.4f;
+      if (y >= 10 && y < 20 && x >= 10 && x < 30) v = 0.6f + 0.4f * v;
+      if (y >= 40 && y < 55 && x >= 30 && x < 50) v = rng() % 2 ? 0.3f : 0.7f;
+    }
+  for (const char* preset : {"default", "paper"}) {
+    Params automatic;
+    set_param(automatic, "preset", preset);
+    EXPECT_EQ(automatic.texture, "auto") << preset;
+    EXPECT_EQ(resolved_texture(automatic, flat.dims), "lbp8");
+    EXPECT_EQ(resolved_texture(automatic, Dims{64, 64, 2}), "lbp6");
+    Params lbp8 = automatic, lbp6 = automatic;
+    set_param(lbp8, "texture", "lbp8");
+    set_param(lbp6, "texture", "lbp6");
+    EXPECT_EQ(resolved_texture(lbp6, flat.dims), "lbp6");  // set explicitly: kept
+    const Result ra = segment(flat, automatic, true), r8 = segment(flat, lbp8, true), r6 = segment(flat, lbp6, true);
+    EXPECT_TRUE(same_blocks(ra, r8)) << preset;
+    EXPECT_EQ(ra.labels, r8.labels) << preset;
+    EXPECT_FALSE(same_blocks(ra, r6) && ra.labels == r6.labels)
+        << preset << ": lbp6 and lbp8 segment this map alike; the test proves nothing";
+  }
+  // A 3D map: "auto" is lbp6 (lbp8 would refuse it).
+  const Grid cube = random_grid(Dims{16, 16, 16}, 3);
+  Params lbp6;
+  set_param(lbp6, "texture", "lbp6");
+  const Result ra = segment(cube, Params(), true), r6 = segment(cube, lbp6, true);
+  EXPECT_TRUE(same_blocks(ra, r6));
+  EXPECT_EQ(ra.labels, r6.labels);
+}
+
 TEST(Params, StageNames) {
   Params p;
-  EXPECT_EQ(get_param(p, "texture"), "lbp6");
+  EXPECT_EQ(get_param(p, "texture"), "auto");
   EXPECT_EQ(get_param(p, "similarity"), "g");
   set_param(p, "texture", "lbp8");
   set_param(p, "similarity", "chi2");
@@ -239,7 +285,8 @@ TEST(Params, StageNames) {
   EXPECT_EQ(p.texture, "lbp8");  // unchanged by the failure
   EXPECT_THROW(set_param(p, "similarity", "G"), Error);
   set_param(p, "preset", "paper");  // resets stage names too
-  EXPECT_EQ(p.texture, "lbp6");
+  EXPECT_EQ(p.texture, "auto");
+  set_param(p, "texture", "auto");  // the default can be asked for by name
   p.similarity = "nope";  // set directly: validate() catches it
   EXPECT_THROW(p.validate(), Error);
   EXPECT_THROW(segment(Grid(Dims{4, 4, 4}), p), Error);

@@ -36,7 +36,7 @@ def test_builtin_registry():
         occseg.stages("filters")
     assert e.value.status == Status.EINVAL and "filters" in e.value.message
     table = {p.name: p for p in occseg.param_table()}
-    assert table["smax"].default == "64" and table["smax"].plugin == "builtin" and table["texture"].default == "lbp6"
+    assert table["smax"].default == "64" and table["smax"].plugin == "builtin" and table["texture"].default == "auto"
 
 
 def test_nrrd_round_trip_keeps_voxel_size_and_origin(tmp_path):

@@ -115,7 +115,7 @@ int run(const InfoArgs& o) {
 Runner add_info(CLI::App& app) {
   auto o = std::make_shared<InfoArgs>();
   CLI::App* c = app.add_subcommand("info", "Describe a map file (format, dims, voxel size, values, states) without segmenting it");
-  c->add_option("input", o->input, "map file: .npy .nrrd .pcd .graph .bt .ot (or a plugin's format)")->required();
+  c->add_option("input", o->input, "map file: .npy .nrrd .yaml .pcd .graph .bt .ot (or a plugin's format)")->required();
   add_pipeline_options(c, o->pipeline);  // the state thresholds come from the preset and --param
   add_input_options(c, o->in);
   add_report_options(c, o->report, false);

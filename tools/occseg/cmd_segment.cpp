@@ -1,8 +1,9 @@
 // `occseg segment IN --out DIR`: segment a map (.npy .nrrd .pcd .graph .bt .ot, see map_input)
 // and write labels.npy, labels.nrrd, segments.json and segmentation.png, plus map.nrrd for inputs
-// that were not grids and segments.pcd for point clouds; then a summary on stdout (text or
-// --json). All outputs or none (OutputSet): until every file is complete the old files of DIR stay
-// as they were; a failure, out of memory or Ctrl-C removes the new files' temporaries.
+// that were not grids, segments.pcd for point clouds and segmentation.pgm + segmentation.yaml (a
+// map_server map) for 2D maps (nz = 1); then a summary on stdout (text or --json). All outputs or
+// none (OutputSet): until every file is complete the old files of DIR stay as they were; a
+// failure, out of memory or Ctrl-C removes the new files' temporaries.
 #include <chrono>
 #include <iostream>
 #include <memory>
@@ -13,6 +14,7 @@
 #include "commands.hpp"
 #include "occseg/error.hpp"
 #include "occseg/file_write.hpp"
+#include "occseg/map_yaml.hpp"
 #include "occseg/npy.hpp"
 #include "occseg/nrrd.hpp"
 #include "occseg/segment.hpp"
@@ -76,6 +78,15 @@ int run(const SegmentArgs& o) {
   if (input.kind == InputKind::cloud && have_pcl())
     files.emplace_back("segments.pcd",
                        [&](const std::string& f, StagedFiles& s) { write_cloud_output(f, grid, r, &s); });
+  std::vector<std::uint8_t> states;
+  if (grid.dims.nz == 1) {  // a 2D map: also as the PGM/YAML pair map_server (a 2D planner) loads
+    states = voxel_states(r);
+    files.emplace_back("segmentation.pgm",
+                       [&](const std::string& f, StagedFiles& s) { write_state_pgm(f, grid.dims, states, &s); });
+    files.emplace_back("segmentation.yaml", [&](const std::string& f, StagedFiles& s) {
+      write_map_yaml(f, "segmentation.pgm", grid, &s);
+    });
+  }
   files.emplace_back("segments.json", [&](const std::string& f, StagedFiles& s) {
     write_file_atomically(f, [&](std::ostream& os) { write_segments_json(os, r, preset); }, &s);
   });
@@ -125,8 +136,8 @@ Runner add_segment(CLI::App& app) {
   auto o = std::make_shared<SegmentArgs>();
   CLI::App* c = app.add_subcommand("segment", "Segment a probabilistic occupancy map; write labels, segments, a picture");
   c->add_option("input", o->input,
-                "map file: .npy/.nrrd grid (float32/float64/uint8/uint16), .pcd cloud, .graph OctoMap scan graph, "
-                ".bt/.ot OctoMap tree")
+                "map file: .npy/.nrrd grid (float32/float64/uint8/uint16), .yaml map_server 2D map, .pcd cloud, "
+                ".graph OctoMap scan graph, .bt/.ot OctoMap tree")
       ->required();
   c->add_option("--out,-o", o->out_dir, "output directory (created if missing)")->required();
   add_pipeline_options(c, o->pipeline);

@@ -10,6 +10,7 @@
 
 #include "occseg/error.hpp"
 #include "occseg/geometry.hpp"
+#include "occseg/map_yaml.hpp"
 #include "occseg/npy.hpp"
 #include "occseg/nrrd.hpp"
 #include "occseg/registry.hpp"
@@ -146,6 +147,16 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
     }
     return in;
   }
+  if (ext == ".yaml") {  // a map_server / Nav2 map: its resolution and origin are in the file
+    reject(o.voxel_size.has_value(), "--voxel-size (the YAML's resolution is the cell size)", ext);
+    reject(o.bbox.has_value(), "--bbox", ext);
+    reject(scan_opts, "--sensor-origin/--sensor-orientation/--max-range", ext);
+    in.kind = InputKind::map2d;
+    in.grid = read_map_yaml(path);
+    in.format = "map_server map (.yaml + PGM image, " + std::to_string(in.grid.dims.nx) + " x " +
+                std::to_string(in.grid.dims.ny) + " cells)";
+    return in;
+  }
   if (ext == ".pcd" || ext == ".graph") {
     reject(coarsen, "--coarsen", ext);
     in.kind = InputKind::cloud;
@@ -203,7 +214,7 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
     return in;
   }
   throw Error(Status::invalid_argument, "'" + path + "': unknown input type '" + ext +
-                                            "' (use .npy, .nrrd, .pcd, .graph, .bt, .ot or one a plugin reads)");
+                                            "' (use .npy, .nrrd, .yaml, .pcd, .graph, .bt, .ot or one a plugin reads)");
 }
 
 void write_cloud_output(const std::string& path, const Grid& grid, const Result& result, StagedFiles* into) {

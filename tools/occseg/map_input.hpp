@@ -24,7 +24,7 @@ struct MapInputOptions {
   std::function<bool(double fraction)> progress;  // clouds: fusion progress (ScanOptions::progress)
 };
 
-enum class InputKind { volume, cloud, tree };
+enum class InputKind { volume, cloud, tree, map2d };  // map2d: a map_server .yaml map
 
 struct MapInput {
   Grid grid;
@@ -35,7 +35,7 @@ struct MapInput {
   std::string nrrd_space;
 };
 
-// Reads .npy, .nrrd, .pcd, .graph, .bt or .ot (case-insensitive extension). Throws
+// Reads .npy, .nrrd, .yaml (map_server), .pcd, .graph, .bt or .ot (case-insensitive extension). Throws
 // Error(invalid_argument) for an unknown extension or an option the format cannot use,
 // Error(unsupported) for a format this build lacks, and the readers' errors otherwise.
 MapInput load_map(const std::string& path, const MapInputOptions& options);

@@ -176,8 +176,20 @@ OCCSEG_API int occseg_param_find(const char *name, uint32_t *index);
  * length and the world position of the outer corner of voxel (0, 0, 0). */
 typedef struct occseg_map occseg_map;
 
-/* Element type of a caller's buffer. U8 and U16 map 0..max onto 0..1. */
-typedef enum { OCCSEG_F32 = 0, OCCSEG_F64 = 1, OCCSEG_U8 = 2, OCCSEG_U16 = 3 } occseg_dtype;
+/* Element type of a caller's buffer. U8 and U16 map 0..max onto 0..1. I8_OCCUPANCY is the int8
+ * cell of a ROS nav_msgs/OccupancyGrid (and of a map_server map once loaded): -1 is unknown
+ * (p = 0.5), 0..100 is the occupancy in percent (p = v / 100); any other value fails with
+ * OCCSEG_EVALUE naming the first such cell. An OccupancyGrid's `data` is row-major with x
+ * fastest and row 0 at the grid's origin, which is occseg's own layout: pass it as it is, with
+ * dims {width, height, 1}, voxel_size = info.resolution and the origin's position (a map whose
+ * origin is rotated about z is not an axis-aligned grid). The values are pinned. */
+typedef enum {
+  OCCSEG_F32 = 0,
+  OCCSEG_F64 = 1,
+  OCCSEG_U8 = 2,
+  OCCSEG_U16 = 3,
+  OCCSEG_I8_OCCUPANCY = 4
+} occseg_dtype;
 
 /* Flags of occseg_map_from_buffer_flags (bitwise or). */
 typedef enum {
@@ -194,7 +206,8 @@ typedef enum {
  * overflows fail with OCCSEG_EINVAL; axes ordered by |stride| must nest, as in every view
  * NumPy can produce. Zero or overflowing dims (more than 2^40 voxels) fail with OCCSEG_EDIMS.
  * F32/F64 values must be probabilities in [0, 1]: the first voxel (x fastest) that is NaN,
- * infinite or out of range fails with OCCSEG_EVALUE naming it. voxel_size must be positive and
+ * infinite or out of range fails with OCCSEG_EVALUE naming it; likewise an I8_OCCUPANCY cell
+ * outside -1..100 (the flags do not apply to it). voxel_size must be positive and
  * finite (OCCSEG_EVALUE). The origin starts at (0, 0, 0). A map's box must lie within 2^40
  * voxels of the world origin, corners origin and origin + dims * voxel_size alike (beyond,
  * voxel corners would round together or overflow to infinity): here, in the setters below and
@@ -212,10 +225,13 @@ OCCSEG_API int occseg_map_from_buffer_flags(occseg_map **out, const void *data, 
 /* Reads a map with the reader registered for the path's extension (see Plugins below): .npy
  * (float32, float64, uint8 or uint16, indexed [z, y, x] or [y, x], C or Fortran order; voxel
  * size 1, origin (0, 0, 0)), .nrrd (origin and voxel size in the file's own space, e.g. LPS,
- * which the map remembers for occseg_map_write), or what plugins add. OCCSEG_EIO if it cannot be
- * read or is not a regular file (a FIFO, a device: refused before any read, so nothing blocks),
- * OCCSEG_EFORMAT if it is not a valid file, OCCSEG_EVALUE for bad probabilities or a box out of
- * range, OCCSEG_EUNSUPPORTED for an extension no reader handles. */
+ * which the map remembers for occseg_map_write), .yaml (a ROS map_server / Nav2 2D map: the PGM
+ * image it names, its resolution and origin; cells as map_server makes them, then p as for
+ * OCCSEG_I8_OCCUPANCY; an origin yaw other than 0 fails with OCCSEG_EUNSUPPORTED), or what
+ * plugins add. OCCSEG_EIO if it cannot be read or is not a regular file (a FIFO, a device:
+ * refused before any read, so nothing blocks), OCCSEG_EFORMAT if it is not a valid file,
+ * OCCSEG_EVALUE for bad probabilities or a box out of range, OCCSEG_EUNSUPPORTED for an
+ * extension no reader handles. */
 OCCSEG_API int occseg_map_read(occseg_map **out, const char *path);
 
 /* Writes the map with the writer registered for the path's extension: .npy (float32 [z, y, x]),
@@ -375,7 +391,7 @@ OCCSEG_API int occseg_result_write(const occseg_result *result, const char *dir)
 /* Plugins add texture operators, histogram similarities, map readers/writers (by file
  * extension) and parameters at run time; occseg_plugin.h is the ABI they are written against and
  * docs/plugins.md explains it. The built-in stages are registered the same way, as the plugins
- * "builtin" (texture lbp6, lbp8; similarity g, chi2) and "builtin_io" (.npy, .nrrd).
+ * "builtin" (texture lbp6, lbp8; similarity g, chi2) and "builtin_io" (.npy, .nrrd; .yaml read).
  *
  * Thread safety: loading is serialised and transactional (a plugin's stages and parameters
  * appear all at once, or not at all if it fails), and loaded plugins are never unloaded, so
@@ -437,7 +453,8 @@ OCCSEG_API const char *occseg_param_plugin(uint32_t index);
 OCCSEG_API int occseg_param_default(uint32_t index, char *buf, size_t size, size_t *length);
 
 /* occseg_map_read / occseg_map_write pick the reader or writer registered for the path's last
- * extension (case-insensitive): built in are .npy and .nrrd, plugins add others (.pcd, .bt, ...).
+ * extension (case-insensitive): built in are .npy and .nrrd (and the reader .yaml), plugins add
+ * others (.pcd, .bt, ...).
  * An extension nobody handles fails with OCCSEG_EUNSUPPORTED naming it. These variants pass
  * reader/writer options: NULL or a NULL-terminated array of "key=value" texts (see the reader's
  * documentation; unknown keys fail). */

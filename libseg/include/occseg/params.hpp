@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "occseg/grid.hpp"
+
 namespace occseg {
 
 enum class State : std::uint8_t { free = 0, unknown = 1, occupied = 2 };
@@ -36,7 +38,9 @@ struct Params {
   // observed side (occseg/planes.hpp). 0: off (paper).
   int support_plane = 256;
   int threads = 0;             // 0: all cores. Results never depend on it.
-  std::string texture = "lbp6";     // texture operator, by name (occseg/registry.hpp)
+  // Texture operator, by name (occseg/registry.hpp). "auto" (both presets): lbp8, the authors'
+  // 2D operator, on a one-layer map (nz = 1), lbp6 on any other (resolved_texture).
+  std::string texture = "auto";
   std::string similarity = "g";     // histogram similarity of the division, by name
   // Values of parameters that plugins declared, as text, by name; unset ones take the declared
   // default (get_param).
@@ -59,6 +63,10 @@ struct Params {
   // texture / similarity name no registered stage.
   void validate() const;
 };
+
+// The texture operator a segmentation of a map of `dims` uses: params.texture, or for "auto"
+// "lbp8" when dims.nz == 1 and "lbp6" otherwise.
+std::string resolved_texture(const Params& params, const Dims& dims);
 
 // Description of one named parameter, for --help, occseg_params_* and the Python bindings.
 struct ParamInfo {

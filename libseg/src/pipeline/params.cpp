@@ -48,7 +48,7 @@ const std::vector<ParamInfo>& param_table() {
       {"occupied_connectivity", "int", 6, 26, "6 or 26: neighbours that join occupied voxels into one segment (default 26, paper 6)"},
       {"support_plane", "int", 0, 1e9, "default preset: voxels of a plane (>= half its segment) that splits objects standing on it off their support; 0 = off"},
       {"threads", "int", 0, 1024, "worker threads, 0 = all cores; results never depend on it"},
-      {"texture", "string", 0, 0, "texture operator by name: lbp6 (paper, 3D), lbp8 (3x3, 2D maps) or one a plugin adds"},
+      {"texture", "string", 0, 0, "texture operator by name: auto (lbp8 when nz = 1, else lbp6), lbp6 (paper, 3D), lbp8 (3x3, 2D maps) or one a plugin adds"},
       {"similarity", "string", 0, 0, "histogram similarity of the division by name: g (eq. 1), chi2 or one a plugin adds"},
   };
   return t;
@@ -65,7 +65,7 @@ const ParamInfo* find_info(const std::string& name) {
 }
 
 void check_stage_names(const Params& p) {
-  if (!find_texture(p.texture))
+  if (p.texture != "auto" && !find_texture(p.texture))
     throw Error(Status::invalid_argument, "parameter 'texture': '" + p.texture +
                                               "' is not a registered texture operator (registered: " + texture_names() + ")");
   if (!find_similarity(p.similarity))
@@ -94,6 +94,11 @@ double parse_number(const ParamInfo& info, const std::string& text) {
 }
 
 }  // namespace
+
+std::string resolved_texture(const Params& p, const Dims& d) {
+  if (p.texture != "auto") return p.texture;
+  return d.nz == 1 ? "lbp8" : "lbp6";
+}
 
 double check_param_value(const ParamInfo& info, const std::string& text) {
   return std::string(info.kind) == "string" ? 0.0 : parse_number(info, text);

@@ -114,9 +114,11 @@ Result segment(const Grid& grid, const Params& params, bool keep_stages) {
   return segment_into(grid, params, keep_stages, LabelArray());
 }
 
-Result segment_into(const Grid& grid, const Params& params, bool keep_stages, LabelArray&& labels,
+Result segment_into(const Grid& grid, const Params& requested, bool keep_stages, LabelArray&& labels,
                     Workspace* workspace) {
-  params.validate();
+  requested.validate();
+  Params params = requested;  // with texture "auto" resolved for this map
+  params.texture = resolved_texture(requested, grid.dims);
   // The kernels of this call, chosen once on the calling thread and handed to every stage.
   const kernels::Table& k = kernels::active();
   // The built-in texture operator checks the values itself (compute_texture); plugins get a

@@ -247,9 +247,10 @@ std::function<void(const std::string&, const Grid&, const std::vector<std::strin
 }
 
 TextureMap run_texture(const Grid& grid, const Params& params) {
-  const TextureOperator* op = find_texture(params.texture);
+  const std::string name = resolved_texture(params, grid.dims);
+  const TextureOperator* op = find_texture(name);
   if (!op)
-    throw Error(Status::invalid_argument, "parameter 'texture': no texture operator '" + params.texture +
+    throw Error(Status::invalid_argument, "parameter 'texture': no texture operator '" + name +
                                               "' is registered (registered: " + texture_names() + ")");
   return op->native ? op->native(grid, params) : op->compute(grid, params);
 }

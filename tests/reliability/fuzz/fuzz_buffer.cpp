@@ -35,6 +35,13 @@ double expected(const std::uint8_t* e, int t, std::uint32_t flags, bool* reject)
     case OCCSEG_F32: { float f; std::memcpy(&f, e, 4); v = f; break; }
     case OCCSEG_F64: std::memcpy(&v, e, 8); break;
     case OCCSEG_U8: return e[0] / 255.0;
+    case OCCSEG_I8_OCCUPANCY: {  // ROS OccupancyGrid: -1 unknown, 0..100 percent, nothing else
+      const auto c = static_cast<std::int8_t>(e[0]);
+      if (c == -1) return 0.5;
+      if (c >= 0 && c <= 100) return c / 100.0;
+      *reject = true;
+      return 0;
+    }
     default: { std::uint16_t u; std::memcpy(&u, e, 2); return u / 65535.0; }
   }
   if (v >= 0 && v <= 1) return v;
@@ -96,7 +103,10 @@ void check_result(const occseg_result* r, const std::size_t d[3], std::vector<st
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   Reader in{data, size};
-  const int dtype = in.byte() % 5;  // 4: invalid on purpose (an int: see c_calls.c)
+  // b % 5 picks F32 .. U16, or for 4 either I8_OCCUPANCY or (odd b / 5) an invalid dtype on
+  // purpose (an int: see c_calls.c), so the inputs found before I8_OCCUPANCY keep their meaning.
+  const int b = in.byte();
+  const int dtype = b % 5 < 4 ? b % 5 : ((b / 5) % 2 ? 5 : OCCSEG_I8_OCCUPANCY);
   std::size_t dims[3];
   for (std::size_t& v : dims) v = in.byte() % 13;  // 0 .. 12, zero on purpose
   const std::uint32_t flags = in.byte() % 5;       // 4: invalid on purpose
@@ -131,11 +141,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     require(rc == OCCSEG_EINVAL || rc == OCCSEG_EDIMS || rc == OCCSEG_EVALUE);
     if (rc == OCCSEG_EDIMS) require(n == 0);
     // Dense, Fortran and flipped views are valid; only arbitrary strides may overlap.
-    if (rc == OCCSEG_EINVAL) require(dtype > OCCSEG_U16 || flags > 3 || mode == 3);
-    if (rc == OCCSEG_EVALUE) require((dtype == OCCSEG_F32 || dtype == OCCSEG_F64) && flags != 3);
+    if (rc == OCCSEG_EINVAL) require(dtype > OCCSEG_I8_OCCUPANCY || flags > 3 || mode == 3);
+    if (rc == OCCSEG_EVALUE)
+      require(((dtype == OCCSEG_F32 || dtype == OCCSEG_F64) && flags != 3) || dtype == OCCSEG_I8_OCCUPANCY);
     return 0;
   }
-  require(map && dtype <= OCCSEG_U16 && flags <= 3 && n > 0);
+  require(map && dtype <= OCCSEG_I8_OCCUPANCY && flags <= 3 && n > 0);
   // Every voxel as the caller's buffer says.
   std::vector<float> values(n);
   require(occseg_map_values(map, values.data(), n) == OCCSEG_OK);
