@@ -125,7 +125,7 @@ FdOutBuf::int_type FdOutBuf::overflow(int_type c) {
 }
 
 std::streamsize FdOutBuf::xsputn(const char* s, std::streamsize n) {
-  if (error_) return 0;
+  if (error_ || n <= 0) return 0;  // (an empty write may come with s == nullptr: memcpy's UB)
   if (n < static_cast<std::streamsize>(epptr() - pptr())) {
     std::memcpy(pptr(), s, static_cast<std::size_t>(n));
     pbump(static_cast<int>(n));
