@@ -88,20 +88,16 @@ __attribute__((target("avx2,popcnt"))) std::size_t list_nonzero(const std::uint3
 
 }  // namespace
 
-void count(const BlockCodes& in, std::size_t bins, std::uint32_t* h) {
-  const bool second = in.second != in.common;
-  if (in.may_lack_texture) {
-    if (second)
-      count_packed<true, true>(in.codes, in.dims, in.b, bins, h, in.common, in.second);
-    else
-      count_packed<true, false>(in.codes, in.dims, in.b, bins, h, in.common, in.common);
-  } else {
-    if (second)
-      count_packed<false, true>(in.codes, in.dims, in.b, bins, h, in.common, in.second);
-    else
-      count_packed<false, false>(in.codes, in.dims, in.b, bins, h, in.common, in.common);
+// count_packed's instantiations as a class template, for generic::count_with_hints.
+template <bool SkipNone, bool Second>
+struct CountKernel {
+  static void count(const code_t* codes, const Dims& dims, const Block& b, std::size_t bins, std::uint32_t* h,
+                    code_t common, code_t second) {
+    count_packed<SkipNone, Second>(codes, dims, b, bins, h, common, second);
   }
-}
+};
+
+void count(const BlockCodes& in, std::size_t bins, std::uint32_t* h) { generic::count_with_hints<CountKernel>(in, bins, h); }
 
 std::size_t nonzero_values(const std::uint32_t* a, const std::uint32_t* b, std::size_t n, std::uint32_t* out) {
   return b ? list_nonzero<true>(a, b, n, out) : list_nonzero<false>(a, nullptr, n, out);

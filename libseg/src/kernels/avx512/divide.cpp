@@ -101,20 +101,16 @@ __attribute__((target("avx512f,popcnt"))) std::size_t list_nonzero(const std::ui
 
 }  // namespace
 
-void count(const BlockCodes& in, std::size_t bins, std::uint32_t* h) {
-  const bool second = in.second != in.common;
-  if (in.may_lack_texture) {
-    if (second)
-      count_compress<true, true>(in.codes, in.dims, in.b, bins, h, in.common, in.second);
-    else
-      count_compress<true, false>(in.codes, in.dims, in.b, bins, h, in.common, in.common);
-  } else {
-    if (second)
-      count_compress<false, true>(in.codes, in.dims, in.b, bins, h, in.common, in.second);
-    else
-      count_compress<false, false>(in.codes, in.dims, in.b, bins, h, in.common, in.common);
+// count_compress's instantiations as a class template, for generic::count_with_hints.
+template <bool SkipNone, bool Second>
+struct CountKernel {
+  static void count(const code_t* codes, const Dims& dims, const Block& b, std::size_t bins, std::uint32_t* h,
+                    code_t common, code_t second) {
+    count_compress<SkipNone, Second>(codes, dims, b, bins, h, common, second);
   }
-}
+};
+
+void count(const BlockCodes& in, std::size_t bins, std::uint32_t* h) { generic::count_with_hints<CountKernel>(in, bins, h); }
 
 std::size_t nonzero_values(const std::uint32_t* a, const std::uint32_t* b, std::size_t n, std::uint32_t* out) {
   return b ? list_nonzero<true>(a, b, n, out) : list_nonzero<false>(a, nullptr, n, out);

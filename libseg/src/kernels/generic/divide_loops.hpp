@@ -21,6 +21,25 @@ template <bool SkipNone>
     if (!SkipNone || row[x] != kNoTexture) ++h[row[x]];
 }
 
+// Calls count(in.codes, in.dims, in.b, bins, h, common, second) of the counting kernel template
+// `Kernel` with its two flags as template arguments (SkipNone: in.may_lack_texture; Second: a
+// second hint differing from the first): the dispatch every vector counting kernel shares.
+template <template <bool, bool> class Kernel>
+[[gnu::always_inline]] inline void count_with_hints(const BlockCodes& in, std::size_t bins, std::uint32_t* h) {
+  const bool second = in.second != in.common;
+  if (in.may_lack_texture) {
+    if (second)
+      Kernel<true, true>::count(in.codes, in.dims, in.b, bins, h, in.common, in.second);
+    else
+      Kernel<true, false>::count(in.codes, in.dims, in.b, bins, h, in.common, in.common);
+  } else {
+    if (second)
+      Kernel<false, true>::count(in.codes, in.dims, in.b, bins, h, in.common, in.second);
+    else
+      Kernel<false, false>::count(in.codes, in.dims, in.b, bins, h, in.common, in.common);
+  }
+}
+
 // Per-thread room for the codes a packing kernel lists (at least n of them).
 inline std::uint16_t* code_list(std::size_t n) {
   thread_local detail::ThreadScratch<std::uint16_t> storage;
