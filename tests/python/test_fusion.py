@@ -13,7 +13,6 @@ import occseg
 from occseg import OccsegError, Status
 
 DATA = os.environ.get("OCCSEG_SHARED_DATA", os.path.join(os.path.dirname(__file__), "..", "..", "..", "shared", "data"))
-pytestmark = pytest.mark.skipif(not hasattr(occseg, "fuse"), reason="liboccseg predates occseg_fusion_*")
 
 TABLE = "table_scene_mug_stereo_textured.pcd"
 OFFICE = "office1.pcd"
