@@ -484,7 +484,11 @@ OCCSEG_API int occseg_map_write_options(const occseg_map *map, const char *path,
  * or non-finite quaternion or a non-finite origin fails with OCCSEG_EVALUE. Points with a NaN or
  * infinite coordinate (the holes of an organized cloud) are skipped, as the .pcd path skips them.
  * Coordinates are moved by the pose in double and rounded to float relative to the grid's corner,
- * so a cloud at UTM-like coordinates keeps its precision. */
+ * so a cloud at UTM-like coordinates keeps its precision.
+ *
+ * Thread safety: occseg_fusion_add_points changes the fusion, so it must not run while another
+ * thread uses the same fusion; occseg_fusion_map and occseg_fusion_counts only read it and may
+ * run on several threads at once. occseg_result_point_labels only reads the result and the map. */
 typedef struct occseg_fusion occseg_fusion;
 
 /* Options of a fusion. Set struct_size = sizeof(occseg_fusion_options) and the defaults with
