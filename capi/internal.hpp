@@ -1,6 +1,7 @@
 // Shared by the capi/*.cpp files: the structs behind the opaque handles and the one place that
 // turns C++ exceptions into status codes, so no exception ever crosses the C ABI.
 #pragma once
+#include <array>
 #include <cstring>
 #include <exception>
 #include <new>
@@ -34,6 +35,9 @@ struct occseg_context {
 struct occseg_result {
   occseg::Result result;
   std::string preset;  // for segments.json
+  // The geometry of the map it was computed on, when it was computed (occseg_result_point_labels).
+  double voxel_size = 1.0;
+  std::array<double, 3> origin{0, 0, 0};
 };
 
 namespace occseg::capi {

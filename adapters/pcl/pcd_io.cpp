@@ -1,6 +1,7 @@
 // .pcd files: reading through PCL's reader (every PCD encoding PCL knows), writing labelled
 // voxel clouds.
 #include <pcl/PCLPointCloud2.h>
+#include <pcl/common/io.h>
 #include <pcl/conversions.h>
 #include <pcl/exceptions.h>
 #include <pcl/io/pcd_io.h>
@@ -180,7 +181,9 @@ class CheckedCopy {
 
 }  // namespace
 
-Grid read_pcd(const std::string& path, const ScanOptions& options) {
+Grid read_pcd(const std::string& path, const ScanOptions& options) { return read_pcd(path, options, nullptr); }
+
+Grid read_pcd(const std::string& path, const ScanOptions& options, PcdCloud* out) {
   options.validate();
   std::optional<CheckedCopy> copy;
   {
@@ -209,16 +212,95 @@ Grid read_pcd(const std::string& path, const ScanOptions& options) {
   check_xyz_fields(path, blob);
   pcl::PointCloud<pcl::PointXYZ> cloud;
   pcl::fromPCLPointCloud2(blob, cloud);
+  if (out) {  // the file's fields and bytes, for writing it back with labels
+    *out = PcdCloud();
+    out->width = blob.width;
+    out->height = blob.height;
+    out->point_step = blob.point_step;
+    for (const pcl::PCLPointField& f : blob.fields)
+      out->fields.push_back({f.name, pcl::getFieldType(f.datatype), static_cast<unsigned>(pcl::getFieldSize(f.datatype)),
+                             static_cast<unsigned>(f.count), f.offset});
+    out->data = std::move(blob.data);
+  }
   blob = pcl::PCLPointCloud2();  // free the raw copy before allocating the grid
   cloud.sensor_origin_ = origin;
   cloud.sensor_orientation_ = orientation;
   if (!origin.head<3>().allFinite() || !orientation.coeffs().allFinite() || orientation.norm() < 1e-6f)
     bad_file(path, "VIEWPOINT is not a finite pose");
   try {
+    if (out) {
+      out->viewpoint = {origin.x(), origin.y(), origin.z(), orientation.w(), orientation.x(), orientation.y(),
+                        orientation.z()};
+      out->pose = options.sensor_pose ? *options.sensor_pose : cloud_pose_d(cloud);
+      out->xyz.resize(3 * cloud.size());
+      for (std::size_t i = 0; i < cloud.size(); ++i) {
+        out->xyz[3 * i] = cloud[i].x;
+        out->xyz[3 * i + 1] = cloud[i].y;
+        out->xyz[3 * i + 2] = cloud[i].z;
+      }
+    }
     return integrate_cloud(cloud, options);
   } catch (const Error& e) {
     throw Error(e.status(), "'" + path + "': " + e.what());
   }
+}
+
+std::vector<std::uint32_t> pcd_point_labels(const PcdCloud& cloud, const Grid& grid, const Result& result,
+                                            int threads) {
+  const std::size_t n = cloud.xyz.size() / 3;
+  if (!(grid.dims == result.dims) || result.labels.size() != grid.dims.count())
+    throw Error(Status::invalid_argument, "point labels: the result was not computed on this grid");
+  GridFrame frame;
+  frame.dims = grid.dims;
+  frame.voxel_size = grid.voxel_size;
+  frame.origin = grid.origin;
+  std::vector<std::uint32_t> labels(n);
+  const LabelArray& l = result.labels;
+  scan_point_voxels(frame, cloud.pose, cloud.xyz.data(), n, 3, labels.data(),
+                    [&l](std::uint64_t v) { return l[static_cast<std::size_t>(v)]; }, threads);
+  return labels;
+}
+
+void write_points_pcd(const std::string& path, const PcdCloud& cloud, const std::vector<std::uint32_t>& labels,
+                      StagedFiles* into) {
+  const std::size_t n = cloud.width * cloud.height;
+  if (labels.size() != n || cloud.data.size() < n * cloud.point_step)
+    throw Error(Status::invalid_argument, "points.pcd: " + std::to_string(labels.size()) + " labels for " +
+                                              std::to_string(n) + " points");
+  std::vector<const PcdCloud::Field*> kept;  // every field but an old "label", then the new one
+  std::size_t bytes = 4;
+  for (const PcdCloud::Field& f : cloud.fields)
+    if (f.name != "label") kept.push_back(&f), bytes += std::size_t(f.size) * f.count;
+  std::ostringstream h;
+  h.precision(9);  // the float VIEWPOINT, exactly
+  h << "# .PCD v0.7 - Point Cloud Data file format (occseg: the input cloud, label = segment id, "
+    << kNoPointLabel << " = none)\nVERSION 0.7\nFIELDS";
+  for (const auto* f : kept) h << ' ' << f->name;
+  h << " label\nSIZE";
+  for (const auto* f : kept) h << ' ' << f->size;
+  h << " 4\nTYPE";
+  for (const auto* f : kept) h << ' ' << f->type;
+  h << " U\nCOUNT";
+  for (const auto* f : kept) h << ' ' << f->count;
+  h << " 1\nWIDTH " << cloud.width << "\nHEIGHT " << cloud.height << "\nVIEWPOINT";
+  for (double v : cloud.viewpoint) h << ' ' << v;
+  h << "\nPOINTS " << n << "\nDATA binary\n";
+  const std::string header = h.str();
+  std::vector<char> body(n * bytes);
+  for (std::size_t i = 0; i < n; ++i) {
+    char* o = &body[i * bytes];
+    const std::uint8_t* p = cloud.data.data() + i * cloud.point_step;
+    for (const auto* f : kept) {
+      const std::size_t len = std::size_t(f->size) * f->count;
+      std::memcpy(o, p + f->offset, len);
+      o += len;
+    }
+    std::memcpy(o, &labels[i], 4);
+  }
+  write_file_atomically(path, [&](std::ostream& os) {
+    os.write(header.data(), static_cast<std::streamsize>(header.size()));
+    os.write(body.data(), static_cast<std::streamsize>(body.size()));
+  }, into);
 }
 
 void write_segments_pcd(const std::string& path, const Grid& grid, const Result& result, StateSet states,

@@ -59,14 +59,15 @@ void ScanBounds::extend(const Vec3& p) {
   }
 }
 
-void ScanBounds::add(const Eigen::Isometry3d& pose, const float* xyz, std::size_t count, std::size_t stride,
-                     double max_range) {
+template <class T>
+void ScanBounds::add_points(const Eigen::Isometry3d& pose, const T* xyz, std::size_t count, std::size_t stride,
+                            double max_range) {
   const Eigen::Vector3d s = pose.translation();
   if (!s.allFinite()) throw Error(Status::bad_value, "sensor origin is not finite");
   extend({s.x(), s.y(), s.z()});
   const Eigen::Matrix3d r = pose.linear();
   for (std::size_t i = 0; i < count; ++i) {
-    const float* p = xyz + i * stride;
+    const T* p = xyz + i * stride;
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) continue;
     Eigen::Vector3d w = r * Eigen::Vector3d(p[0], p[1], p[2]) + s;
     if (max_range >= 0) {
@@ -76,6 +77,16 @@ void ScanBounds::add(const Eigen::Isometry3d& pose, const float* xyz, std::size_
     }
     extend({w.x(), w.y(), w.z()});
   }
+}
+
+void ScanBounds::add(const Eigen::Isometry3d& pose, const float* xyz, std::size_t count, std::size_t stride,
+                     double max_range) {
+  add_points(pose, xyz, count, stride, max_range);
+}
+
+void ScanBounds::add(const Eigen::Isometry3d& pose, const double* xyz, std::size_t count, std::size_t stride,
+                     double max_range) {
+  add_points(pose, xyz, count, stride, max_range);
 }
 
 GridFrame ScanBounds::frame(double voxel_size, double margin) const {
@@ -149,32 +160,87 @@ GridFrame at_zero(GridFrame f) {
 ScanFusion::ScanFusion(const GridFrame& frame, const SensorModel& model)
     : frame_(checked(frame)), fusion_(at_zero(frame), model) {}
 
-void ScanFusion::insert(const Eigen::Isometry3d& pose, const float* xyz, std::size_t count, std::size_t stride,
-                        int threads) {
-  const Eigen::Vector3d t = pose.translation();
-  for (int k = 0; k < 3; ++k) check_coordinate(t[k], k, frame_.voxel_size, "sensor origin");
-  // The sensor and the points relative to the grid corner, in double; only the differences,
-  // which are small inside and near the grid, become floats.
-  const Eigen::Vector3d o(frame_.origin[0], frame_.origin[1], frame_.origin[2]);
-  const Eigen::Vector3d s = t - o;
-  const Vec3 sensor{s.x(), s.y(), s.z()};
-  if (is_identity(pose) && o.isZero()) {  // relative = world: the points as they are, no copy
-    fusion_.insert_scan(sensor, xyz, count, stride, threads);
-    return;
-  }
-  std::vector<float> rel(3 * count);  // NaN points stay NaN and are skipped by the fusion
-  const Eigen::Matrix3d r = pose.linear();
+namespace {
+
+// The points of a scan relative to the frame's corner, as floats: the sensor-frame points moved
+// by the pose in double (the translation taken relative to the corner first), so only the small
+// differences are rounded to float. NaN points stay NaN. The one conversion ScanFusion::insert
+// and scan_point_voxels share, so a point's voxel is the voxel its return went into.
+template <class T>
+std::vector<float> relative_points(const Eigen::Matrix3d& r, const Eigen::Vector3d& s, const T* xyz,
+                                   std::size_t count, std::size_t stride, int threads) {
+  std::vector<float> rel(3 * count);
   parallel_for(count, threads, [&](std::size_t b, std::size_t e) {
     for (std::size_t i = b; i < e; ++i) {
-      const float* p = xyz + i * stride;
+      const T* p = xyz + i * stride;
       const Eigen::Vector3d w = r * Eigen::Vector3d(p[0], p[1], p[2]) + s;
       rel[3 * i] = static_cast<float>(w.x());
       rel[3 * i + 1] = static_cast<float>(w.y());
       rel[3 * i + 2] = static_cast<float>(w.z());
     }
   });
+  return rel;
+}
+
+// The sensor relative to the corner of a frame, after the range check of ScanFusion::insert.
+Eigen::Vector3d relative_sensor(const GridFrame& frame, const Eigen::Isometry3d& pose) {
+  const Eigen::Vector3d t = pose.translation();
+  for (int k = 0; k < 3; ++k) check_coordinate(t[k], k, frame.voxel_size, "sensor origin");
+  return t - Eigen::Vector3d(frame.origin[0], frame.origin[1], frame.origin[2]);
+}
+
+}  // namespace
+
+void ScanFusion::insert(const Eigen::Isometry3d& pose, const float* xyz, std::size_t count, std::size_t stride,
+                        int threads) {
+  const Eigen::Vector3d s = relative_sensor(frame_, pose);
+  const Vec3 sensor{s.x(), s.y(), s.z()};
+  const bool at_origin = frame_.origin[0] == 0 && frame_.origin[1] == 0 && frame_.origin[2] == 0;
+  if (is_identity(pose) && at_origin) {  // relative = world: the points as they are, no copy
+    fusion_.insert_scan(sensor, xyz, count, stride, threads);
+    return;
+  }
+  const std::vector<float> rel = relative_points(pose.linear(), s, xyz, count, stride, threads);
   fusion_.insert_scan(sensor, rel.data(), count, 3, threads);
 }
+
+void ScanFusion::insert(const Eigen::Isometry3d& pose, const double* xyz, std::size_t count, std::size_t stride,
+                        int threads) {
+  // Always through the copy: the fusion takes floats. With the identity pose the copy holds
+  // exactly float(x), float(y), float(z), as the float path would read them.
+  const Eigen::Vector3d s = relative_sensor(frame_, pose);
+  const std::vector<float> rel = relative_points(pose.linear(), s, xyz, count, stride, threads);
+  fusion_.insert_scan({s.x(), s.y(), s.z()}, rel.data(), count, 3, threads);
+}
+
+template <class T>
+void scan_point_voxels(const GridFrame& frame, const Eigen::Isometry3d& pose, const T* xyz, std::size_t count,
+                       std::size_t stride, std::uint32_t* out, const std::function<std::uint32_t(std::uint64_t)>& label,
+                       int threads) {
+  const Eigen::Vector3d s = relative_sensor(frame, pose);
+  GridFrame zero = frame;
+  zero.origin = {0, 0, 0};
+  const Vec3 sensor{s.x(), s.y(), s.z()};
+  // In blocks, so a cloud of any size needs only a block's floats at a time.
+  constexpr std::size_t kBlock = std::size_t(1) << 16;
+  for (std::size_t b = 0; b < count; b += kBlock) {
+    const std::size_t n = std::min(kBlock, count - b);
+    const std::vector<float> rel = relative_points(pose.linear(), s, xyz + b * stride, n, stride, threads);
+    parallel_for(n, threads, [&](std::size_t i0, std::size_t i1) {
+      for (std::size_t i = i0; i < i1; ++i) {
+        std::uint64_t v;
+        out[b + i] = endpoint_voxel(zero, sensor, &rel[3 * i], v) ? label(v) : kNoPointLabel;
+      }
+    });
+  }
+}
+
+template void scan_point_voxels<float>(const GridFrame&, const Eigen::Isometry3d&, const float*, std::size_t,
+                                       std::size_t, std::uint32_t*, const std::function<std::uint32_t(std::uint64_t)>&,
+                                       int);
+template void scan_point_voxels<double>(const GridFrame&, const Eigen::Isometry3d&, const double*, std::size_t,
+                                        std::size_t, std::uint32_t*,
+                                        const std::function<std::uint32_t(std::uint64_t)>&, int);
 
 Grid ScanFusion::grid() const {
   Grid g = fusion_.grid();

@@ -47,3 +47,11 @@ if _lib.has("occseg_plugins_load") and _lib.has("occseg_plugin_count") and _lib.
 
     __all__ += ["load_plugin", "load_default_plugins", "plugin_search_path", "plugins", "stages", "PluginInfo",
                 "StageInfo"]
+
+# Clouds as arrays (occseg_fusion_*, occseg_result_point_labels): from the library version that
+# added them; absent with an older library (test with hasattr(occseg, "fuse")).
+if _lib.has("occseg_fusion_new") and _lib.has("occseg_result_point_labels"):
+    from ._fusion import Fusion, fuse  # noqa: F401
+    from ._result import NO_LABEL  # noqa: F401
+
+    __all__ += ["fuse", "Fusion", "NO_LABEL"]

@@ -24,7 +24,7 @@ _live = {}
 
 
 def live_handles():
-    """Number of C handles the bindings currently own, by kind ("map", "result", "params", "context")."""
+    """Number of C handles the bindings currently own, by kind ("map", "result", "params", "context", "fusion")."""
     with _lock:
         return {k: v for k, v in _live.items() if v}
 

@@ -35,6 +35,20 @@ class SegmentInfo(ctypes.Structure):
     ]
 
 
+class FusionOptions(ctypes.Structure):
+    """occseg_fusion_options (occseg.h); struct_size must be ctypes.sizeof(FusionOptions)."""
+    _fields_ = [
+        ("struct_size", ctypes.c_uint32),
+        ("threads", ctypes.c_int32),
+        ("voxel_size", ctypes.c_double),
+        ("margin", ctypes.c_double),
+        ("max_range", ctypes.c_double),
+        ("use_box", ctypes.c_int32),
+        ("box_min", c_double3),
+        ("box_max", c_double3),
+    ]
+
+
 # int (*occseg_progress_fn)(const char *stage, double fraction, void *user)
 PROGRESS_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_char_p, ctypes.c_double, ctypes.c_void_p)
 
@@ -113,6 +127,14 @@ OPTIONAL_PROTOTYPES = {
     "occseg_param_default": (_I, [_U32, ctypes.c_char_p, ctypes.c_size_t, ctypes.POINTER(ctypes.c_size_t)]),
     "occseg_map_read_options": (_I, [ctypes.POINTER(_P), _S, ctypes.POINTER(_S)]),
     "occseg_map_write_options": (_I, [_P, _S, ctypes.POINTER(_S)]),
+    "occseg_fusion_options_init": (None, [ctypes.POINTER(FusionOptions)]),
+    "occseg_fusion_new": (_I, [ctypes.POINTER(_P), ctypes.POINTER(FusionOptions)]),
+    "occseg_fusion_free": (None, [_P]),
+    "occseg_fusion_add_points": (_I, [_P, _P, _I, ctypes.c_size_t, ctypes.c_ssize_t, _P, _P]),
+    "occseg_fusion_map": (_I, [ctypes.POINTER(_P), _P]),
+    "occseg_fusion_counts": (_I, [_P, ctypes.POINTER(ctypes.c_uint64), ctypes.POINTER(ctypes.c_uint64)]),
+    "occseg_result_point_labels": (_I, [_P, _P, _P, _I, ctypes.c_size_t, ctypes.c_ssize_t, _P, _P, _P,
+                                        ctypes.c_size_t]),
 }
 
 

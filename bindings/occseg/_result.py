@@ -38,6 +38,9 @@ class Segment:
         return tuple(slice(lo[k], hi[k] + 1) for k in (2, 1, 0))
 
 
+NO_LABEL = 0xFFFFFFFF  # OCCSEG_NO_LABEL: Result.point_labels of a point no voxel holds
+
+
 class Result(Owned):
     """The output of occseg.segment().
 
@@ -127,6 +130,24 @@ class Result(Owned):
         """World (x, y, z) coordinates, in metres, of the centres of the segment's voxels."""
         s = self._checked("points", segment_id)
         return np.asarray(self.origin) + (self._voxels(s) + 0.5) * self.voxel_size
+
+    def point_labels(self, points, origin=(0.0, 0.0, 0.0), orientation=(1.0, 0.0, 0.0, 0.0)):
+        """The segment id of each input point (occseg_result_point_labels), as uint32: for an (N, 3)
+        cloud an (N,) array, for an organized (H, W, 3) cloud an (H, W) label image. A point gets
+        the label of the voxel it lies in, computed as the fusion computes the voxel of its
+        return, so pass the pose the cloud was fused with (origin (x, y, z), orientation
+        (w, x, y, z), as for occseg.fuse); NO_LABEL (2**32 - 1) for a point with a NaN or
+        infinite coordinate or outside the grid. Uses the voxel size and origin of the map this
+        result was computed on."""
+        from ._fusion import point_args, pose_args
+        who = "occseg.Result.point_labels"
+        keep, data, dtype, count, stride, lead = point_args(who, points)
+        o, q = pose_args(who, origin, orientation)
+        out = np.empty(count, dtype=np.uint32)
+        self._call(lambda h: check(lib.occseg_result_point_labels(h, None, data, dtype, count, stride, o, q,
+                                                                  out.ctypes.data, out.size)))
+        del keep
+        return out.reshape(lead)
 
     def __repr__(self):
         n = np.bincount([s.state for s in self.segments], minlength=3)

@@ -47,7 +47,7 @@ def check(name, args, cloud=False, grid=False):
     assert r.returncode == 0, (name, r.stderr)
     files = sorted(os.listdir(out))
     want = ["labels.npy", "labels.nrrd", "segmentation.png", "segments.json"] + ([] if grid else ["map.nrrd"]) + (
-        ["segments.pcd"] if cloud else [])
+        ["segments.pcd"] if cloud else []) + (["points.labels.npy", "points.pcd"] if name.startswith("pcd") else [])
     assert files == sorted(want), (name, files)
     labels = np.load(os.path.join(out, "labels.npy"))
     lab_nrrd, vs, origin = read_nrrd(os.path.join(out, "labels.nrrd"))

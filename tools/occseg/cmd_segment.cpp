@@ -1,7 +1,8 @@
 // `occseg segment IN --out DIR`: segment a map (.npy .nrrd .pcd .graph .bt .ot, see map_input)
 // and write labels.npy, labels.nrrd, segments.json and segmentation.png, plus map.nrrd for inputs
 // that were not grids, segments.pcd for point clouds and segmentation.pgm + segmentation.yaml (a
-// map_server map) for 2D maps (nz = 1); then a summary on stdout (text or --json). All outputs or
+// map_server map) for 2D maps (nz = 1), points.labels.npy and points.pcd (labels on the input
+// points) for .pcd clouds; then a summary on stdout (text or --json). All outputs or
 // none (OutputSet): until every file is complete the old files of DIR stay as they were; a
 // failure, out of memory or Ctrl-C removes the new files' temporaries.
 #include <chrono>
@@ -78,6 +79,20 @@ int run(const SegmentArgs& o) {
   if (input.kind == InputKind::cloud && have_pcl())
     files.emplace_back("segments.pcd",
                        [&](const std::string& f, StagedFiles& s) { write_cloud_output(f, grid, r, &s); });
+  // Labels back on the input points (issue 26), for .pcd inputs; computed once for both files.
+  std::vector<std::uint32_t> point_labels;
+  if (input.point_labels) {
+    point_labels = input.point_labels(grid, r);
+    // default (outputs-plan): uint32, one label per input point in file order ([height, width]
+    // for an organized cloud), UINT32_MAX for NaN points
+    files.emplace_back("points.labels.npy", [&](const std::string& f, StagedFiles& s) {
+      write_npy(f, "<u4", input.point_shape, point_labels.data(), point_labels.size() * sizeof(std::uint32_t), &s);
+    });
+  }
+  if (input.write_points_pcd)  // on request (outputs-plan): the input cloud with a label field
+    files.emplace_back("points.pcd", [&](const std::string& f, StagedFiles& s) {
+      input.write_points_pcd(f, point_labels, s);
+    });
   std::vector<std::uint8_t> states;
   if (grid.dims.nz == 1) {  // a 2D map: also as the PGM/YAML pair map_server (a 2D planner) loads
     states = voxel_states(r);

@@ -7,6 +7,7 @@
 #include <cctype>
 #include <cstdio>
 #include <iostream>
+#include <memory>
 
 #include "occseg/error.hpp"
 #include "occseg/geometry.hpp"
@@ -162,8 +163,18 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
     in.kind = InputKind::cloud;
     if (ext == ".pcd") {
 #ifdef OCCSEG_HAVE_PCL
-      in.grid = read_pcd(path, scan_options(o));
+      auto cloud = std::make_shared<PcdCloud>();
+      in.grid = read_pcd(path, scan_options(o), cloud.get());
       in.format = "PCL point cloud (.pcd), fused by ray casting";
+      in.point_shape = cloud->height > 1 ? std::vector<std::size_t>{cloud->height, cloud->width}
+                                         : std::vector<std::size_t>{cloud->width * cloud->height};
+      const int threads = o.threads;
+      in.point_labels = [cloud, threads](const Grid& g, const Result& r) {
+        return pcd_point_labels(*cloud, g, r, threads);
+      };
+      in.write_points_pcd = [cloud](const std::string& f, const std::vector<std::uint32_t>& labels, StagedFiles& s) {
+        write_points_pcd(f, *cloud, labels, &s);
+      };
 #else
       not_built(ext, "PCL (liboccseg_pcl)");
 #endif

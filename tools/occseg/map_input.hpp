@@ -3,9 +3,11 @@
 // adapter headers); a build without them reports Error(unsupported) for those extensions.
 #pragma once
 #include <array>
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "occseg/file_write.hpp"
 #include "occseg/grid.hpp"
@@ -33,6 +35,14 @@ struct MapInput {
   // The named space of a .nrrd input (teem's name, e.g. "left-posterior-superior"): the grid is
   // in its coordinates, and labels.nrrd is written in it. Empty for every other input.
   std::string nrrd_space;
+  // .pcd inputs (issue 26): the segment id of each input point, in file order (UINT32_MAX: a NaN
+  // point, or one outside the grid), and a writer of the input cloud with a `label` field.
+  // Empty for every other input. A label image for organized clouds: point_shape is {height,
+  // width} then, {count} otherwise.
+  std::function<std::vector<std::uint32_t>(const Grid&, const Result&)> point_labels;
+  std::vector<std::size_t> point_shape;
+  std::function<void(const std::string& path, const std::vector<std::uint32_t>& labels, StagedFiles& into)>
+      write_points_pcd;
 };
 
 // Reads .npy, .nrrd, .yaml (map_server), .pcd, .graph, .bt or .ot (case-insensitive extension). Throws

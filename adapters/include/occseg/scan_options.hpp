@@ -14,6 +14,7 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <optional>
 
@@ -62,6 +63,9 @@ class ScanBounds {
            double max_range) {
     add(Eigen::Isometry3d(pose.cast<double>()), xyz, count, stride, max_range);
   }
+  // Same for points in double (the C ABI's and Python's float64 clouds).
+  void add(const Eigen::Isometry3d& pose, const double* xyz, std::size_t count, std::size_t stride,
+           double max_range);
   bool empty() const { return !any_; }
   // The smallest voxel-aligned frame holding everything added, padded by `margin` metres
   // (fit_frame of the core). Throws Error(bad_value) if nothing finite was added, and "points or
@@ -71,6 +75,9 @@ class ScanBounds {
 
  private:
   void extend(const Vec3& p);
+  template <class T>
+  void add_points(const Eigen::Isometry3d& pose, const T* xyz, std::size_t count, std::size_t stride,
+                  double max_range);
   bool any_ = false;
   Vec3 lo_{0, 0, 0}, hi_{0, 0, 0};
 };
@@ -96,6 +103,10 @@ class ScanFusion {
   // callback.
   void insert(const Eigen::Isometry3d& pose, const float* xyz, std::size_t count, std::size_t stride,
               int threads = 0);
+  // Same for points in double: transformed in double and rounded to float once, so points that
+  // are floats widened to double give exactly the grid of the float call.
+  void insert(const Eigen::Isometry3d& pose, const double* xyz, std::size_t count, std::size_t stride,
+              int threads = 0);
   // The fusion itself (for progress and counts); its frame has the origin (0, 0, 0).
   OccupancyFusion& fusion() { return fusion_; }
   const OccupancyFusion& fusion() const { return fusion_; }
@@ -107,6 +118,20 @@ class ScanFusion {
   GridFrame frame_;
   OccupancyFusion fusion_;
 };
+
+// The label of a point no voxel holds (non-finite, or outside the grid): UINT32_MAX, as
+// OCCSEG_NO_LABEL of the C ABI.
+constexpr std::uint32_t kNoPointLabel = 0xffffffffu;
+
+// For each of `count` points of a scan (x, y, z of type T, `stride` elements apart, in the sensor
+// frame, seen from `pose`): out[i] = label(voxel index) of the voxel of `frame` (world
+// coordinates) the point lies in, computed exactly as ScanFusion::insert and the ray walk compute
+// the voxel of its return (endpoint_voxel), or kNoPointLabel when the point is not finite or lies
+// outside the grid. T is float or double. Error(bad_value) for a sensor out of range.
+template <class T>
+void scan_point_voxels(const GridFrame& frame, const Eigen::Isometry3d& pose, const T* xyz, std::size_t count,
+                       std::size_t stride, std::uint32_t* out, const std::function<std::uint32_t(std::uint64_t)>& label,
+                       int threads = 0);
 
 // Feeds options.progress (if set) from the fusion: the fraction is (before + rays of the current
 // scan) / total, where `*before` counts the points of the scans already inserted (the caller

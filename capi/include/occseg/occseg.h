@@ -461,6 +461,111 @@ OCCSEG_API int occseg_param_default(uint32_t index, char *buf, size_t size, size
 OCCSEG_API int occseg_map_read_options(occseg_map **out, const char *path, const char *const *options);
 OCCSEG_API int occseg_map_write_options(const occseg_map *map, const char *path, const char *const *options);
 
+/* ========================================================================================== */
+/*  Point clouds: fusion into a map, labels back on the points                                */
+/* ========================================================================================== */
+
+/* Clouds held in memory (an (N, 3) array from a depth camera driver, a ROS PointCloud2, Open3D)
+ * fused into an occupancy map by ray casting, with the very code that fuses a .pcd file (the
+ * pcl_reader plugin behind occseg_map_read): the same points with the same pose and options give
+ * a bit-identical map. Model: OctoMap's log-odds inverse sensor model (hit 0.7, miss 0.4, clamped
+ * to [0.12, 0.97]); every voxel a ray crosses gets a miss, the voxel holding its return a hit,
+ * each voxel at most one update per scan and a hit winning over a miss; untouched voxels are 0.5.
+ *
+ * A point cloud is `count` points of three coordinates x, y, z of `dtype` (OCCSEG_F32 or
+ * OCCSEG_F64; others fail with OCCSEG_EINVAL), point i at (const char *)points + i * stride with
+ * its x, y, z consecutive (any alignment; stride 0: packed, 3 * element size; a negative stride
+ * walks backwards from `points`; |stride| below a point's 3 elements fails with OCCSEG_EINVAL).
+ * Its pose maps the points into the world frame, with the sensor at `origin`: world = R p +
+ * origin, R the rotation of the quaternion `orientation_wxyz` = (w, x, y, z), as the command's
+ * --sensor-origin and --sensor-orientation take it and a .pcd VIEWPOINT stores it. NULL origin
+ * means (0, 0, 0), NULL orientation the identity (1, 0, 0, 0). The quaternion is normalised, as
+ * the .pcd path does (so any non-zero multiple of a unit quaternion is the same rotation); a zero
+ * or non-finite quaternion or a non-finite origin fails with OCCSEG_EVALUE. Points with a NaN or
+ * infinite coordinate (the holes of an organized cloud) are skipped, as the .pcd path skips them.
+ * Coordinates are moved by the pose in double and rounded to float relative to the grid's corner,
+ * so a cloud at UTM-like coordinates keeps its precision.
+ *
+ * Thread safety: occseg_fusion_add_points changes the fusion, so it must not run while another
+ * thread uses the same fusion; occseg_fusion_map and occseg_fusion_counts only read it and may
+ * run on several threads at once. occseg_result_point_labels only reads the result and the map. */
+typedef struct occseg_fusion occseg_fusion;
+
+/* Options of a fusion. Set struct_size = sizeof(occseg_fusion_options) and the defaults with
+ * OCCSEG_FUSION_OPTIONS_INIT or occseg_fusion_options_init(), then change fields. */
+typedef struct {
+  uint32_t struct_size;  /* sizeof(occseg_fusion_options); any other value fails with OCCSEG_EINVAL */
+  int32_t threads;       /* worker threads, 0: one per core; the map never depends on it */
+  double voxel_size;     /* metres per voxel edge, positive and finite (default 0.05, as .pcd) */
+  double margin;         /* metres added on every side of a fitted box (default 0; unused with use_box) */
+  double max_range;      /* metres; < 0: unlimited (default -1). Longer rays mark free space only */
+  int32_t use_box;       /* nonzero: the grid is the fixed box below (else fitted, see occseg_fusion_map) */
+  double box_min[3];     /* world corner of the box (the map's origin) */
+  double box_max[3];     /* far corner: ceil((max - min) / voxel_size) voxels per axis */
+} occseg_fusion_options;
+
+#define OCCSEG_FUSION_OPTIONS_INIT \
+  { (uint32_t)sizeof(occseg_fusion_options), 0, 0.05, 0.0, -1.0, 0, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0} }
+
+/* Sets *opts to the defaults above, struct_size included (for FFIs that cannot use the macro).
+ * NULL is a no-op. */
+OCCSEG_API void occseg_fusion_options_init(occseg_fusion_options *opts);
+
+/* Starts a fusion (opts NULL: the defaults). The grid's bounds:
+ *   - use_box: the box given, fixed up front (origin box_min, as the command's --bbox); each
+ *     occseg_fusion_add_points ray-casts its scan into the grid at once (rays are clipped to the
+ *     box, returns outside it only free space), so memory is the grid's (5 bytes a voxel), however
+ *     many scans come; a box needing more than 2^40 voxels fails with OCCSEG_EDIMS here.
+ *   - otherwise: fitted at the end to every scan, as the .pcd path fits one cloud: the smallest
+ *     voxel-aligned box (corners multiples of voxel_size) holding every finite point and every
+ *     sensor origin (a return beyond max_range counting up to max_range), padded by margin.
+ *     The scans are buffered (a copy of their points, 12 bytes a point for F32, 24 for F64)
+ *     and ray-cast, in the order added, by occseg_fusion_map.
+ * Fails with OCCSEG_EINVAL (NULL out, bad struct_size, negative threads or margin, NaN
+ * max_range), OCCSEG_EVALUE (voxel_size not positive and finite; an empty, inverted, non-finite
+ * or out-of-range box), OCCSEG_EDIMS, OCCSEG_ENOMEM. */
+OCCSEG_API int occseg_fusion_new(occseg_fusion **out, const occseg_fusion_options *opts);
+
+/* Frees a fusion and its buffered scans. NULL is a no-op. */
+OCCSEG_API void occseg_fusion_free(occseg_fusion *fusion);
+
+/* Adds one scan (see the section's text for points, strides and the pose). Scans accumulate:
+ * call it once per scan of a robot's sequence, each with its own pose. A scan of only
+ * non-finite points is accepted (it adds nothing but its sensor origin to a fitted box).
+ * Fails, leaving the fusion as it was, with OCCSEG_EINVAL (NULL fusion or points, count 0, bad
+ * dtype or stride, a stride whose extent overflows), OCCSEG_EVALUE (a bad pose; a point or
+ * sensor more than 2^40 voxels from the world origin), OCCSEG_EDIMS (without use_box: the scans
+ * so far would need a grid of more than 2^40 voxels, or an axis longer than that), OCCSEG_ENOMEM. */
+OCCSEG_API int occseg_fusion_add_points(occseg_fusion *fusion, const void *points, occseg_dtype dtype, size_t count,
+                                        ptrdiff_t stride, const double origin[3], const double orientation_wxyz[4]);
+
+/* The map of every scan added so far, as a new map the caller frees (the fusion goes on: more
+ * scans may follow, and a later call gives the map of all of them). Without use_box the
+ * buffered scans are ray-cast here, into the box fitted to all of them, which costs a whole
+ * fusion per call. Fails with OCCSEG_EVALUE "no finite point" when no scan added a finite
+ * point (as the .pcd path fails on a cloud of NaN), OCCSEG_ENOMEM. */
+OCCSEG_API int occseg_fusion_map(occseg_map **out, const occseg_fusion *fusion);
+
+/* Number of scans and of finite points added so far (either pointer may be NULL). */
+OCCSEG_API int occseg_fusion_counts(const occseg_fusion *fusion, uint64_t *scans, uint64_t *points);
+
+/* The label occseg_result_point_labels gives a point no voxel holds. */
+#define OCCSEG_NO_LABEL UINT32_MAX
+
+/* Labels back on the input: out[i] = the segment id of the voxel input point i lies in, or
+ * OCCSEG_NO_LABEL when the point has a non-finite coordinate or lies outside the grid. Points,
+ * stride, dtype and pose as for occseg_fusion_add_points (pass the pose the scan was fused
+ * with); the voxel is computed exactly as the fusion computes the voxel of the point's return,
+ * so every point of a fused scan gets the label of the voxel its return went into. For an
+ * organized cloud (rows of width points, in row order) out is a label image of the same shape.
+ * The grid's geometry (voxel size, origin) is that of `map` (dims must equal the result's, else
+ * OCCSEG_EINVAL), or with map == NULL the one the map had when occseg_segment (or
+ * occseg_context_segment) made the result. `out_count` is the capacity of `out` in elements;
+ * less than `count` fails with OCCSEG_ERANGE. Other failures as occseg_fusion_add_points. */
+OCCSEG_API int occseg_result_point_labels(const occseg_result *result, const occseg_map *map, const void *points,
+                                          occseg_dtype dtype, size_t count, ptrdiff_t stride, const double origin[3],
+                                          const double orientation_wxyz[4], uint32_t *out, size_t out_count);
+
 #ifdef __cplusplus
 } /* extern "C" */
 #endif

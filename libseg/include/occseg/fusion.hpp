@@ -73,6 +73,13 @@ class OccupancyFusion {
   Progress progress_;
 };
 
+// The voxel that OccupancyFusion::insert_scan over `frame` gives the hit of a return at `end`
+// seen from `sensor` (both world metres, as insert_scan takes them): the same arithmetic as the
+// ray walk, so a point's voxel here is always the voxel its return went into. Ignores max range
+// (a return beyond it still lies in that voxel). False, and `index` untouched, when `end` is not
+// finite or lies outside the grid box; `sensor` must be finite. index = x + nx * (y + ny * z).
+bool endpoint_voxel(const GridFrame& frame, const Vec3& sensor, const float end[3], std::uint64_t& index);
+
 // The frame (origin and dims) of the smallest voxel-aligned box that holds all the points and
 // the sensor positions, padded by `margin` metres.
 GridFrame fit_frame(const std::vector<Vec3>& points, double voxel_size, double margin = 0.0);

@@ -263,6 +263,22 @@ void OccupancyFusion::insert_scan(const Vec3& sensor, const std::vector<Vec3>& e
   insert_scan(sensor, xyz.data(), endpoints.size(), 3, threads);
 }
 
+bool endpoint_voxel(const GridFrame& frame, const Vec3& sensor, const float end[3], std::uint64_t& index) {
+  if (!std::isfinite(end[0]) || !std::isfinite(end[1]) || !std::isfinite(end[2])) return false;
+  // As insert_scan computes a (the sensor) and b (the endpoint) in grid units.
+  const double vs = frame.voxel_size;
+  const double a[3] = {(sensor[0] - frame.origin[0]) / vs, (sensor[1] - frame.origin[1]) / vs,
+                       (sensor[2] - frame.origin[2]) / vs};
+  const Vec3 e{end[0], end[1], end[2]};
+  double b[3];
+  for (int k = 0; k < 3; ++k) b[k] = (e[k] - frame.origin[k]) / vs;
+  Walk w;
+  TouchBox box;
+  if (!start_walk(a, b, true, frame.dims, w, box) || !w.hit) return false;
+  index = w.end;
+  return true;
+}
+
 Grid OccupancyFusion::grid() const {
   Grid g;
   g.dims = frame_.dims;
