@@ -130,7 +130,7 @@ class Map(Owned):
         p = path_bytes("occseg.Map.write", "path", path)
         if has("occseg_map_write_options"):
             opts = option_array("occseg_map_write", options)
-            self._call(lambda h: check(lib.occseg_map_write_options(h, p, opts)))
+            _plugin_hint(lambda: self._call(lambda h: check(lib.occseg_map_write_options(h, p, opts))))
         elif options:
             raise OccsegError(Status.EUNSUPPORTED, "occseg_map_write: options need a liboccseg with "
                                                    "occseg_map_write_options")
@@ -182,15 +182,31 @@ def _origin_arg(who, value):
     return tuple(real(who, f"origin[{k}]", v) for k, v in enumerate(items))
 
 
+def _plugin_hint(call):
+    """Runs `call` (a check() of a read or write); an extension no reader or writer serves gets the
+    Python spelling of the C error's advice added (the library has already searched the default
+    plugin path by then, unless OCCSEG_NO_DEFAULT_PLUGINS is set)."""
+    try:
+        call()
+    except OccsegError as e:
+        if e.status != Status.EUNSUPPORTED or not ("no reader for" in e.message or "no writer for" in e.message):
+            raise
+        raise OccsegError(e.code, e.message + "; from Python: occseg.load_plugin(path) or "
+                                              "occseg.load_default_plugins()") from None
+
+
 def read_map(path, **options):
     """Reads a map through the library's readers (occseg_map_read_options): the extension picks
-    the reader (.npy and .nrrd built in, more from plugins), and each keyword becomes a reader
+    the reader (.npy, .nrrd and .yaml built in, more from plugins: the first read of an extension
+    no loaded reader serves loads the default plugin search path, unless OCCSEG_NO_DEFAULT_PLUGINS
+    is set, so .bt, .ot, .graph and .pcd are read without a load call), and each keyword becomes a reader
     option "key=value" (e.g. voxel_size=0.05 for .npy; a reader refuses keys it does not know).
     A library older than the plugin interface reads .npy only, and takes voxel_size only."""
     out = ctypes.c_void_p()
     p = path_bytes("occseg.read_map", "path", path)
     if has("occseg_map_read_options"):
-        check(lib.occseg_map_read_options(ctypes.byref(out), p, option_array("occseg_map_read", options)))
+        opts = option_array("occseg_map_read", options)
+        _plugin_hint(lambda: check(lib.occseg_map_read_options(ctypes.byref(out), p, opts)))
         return Map(out)
     options = dict(options)
     voxel_size = options.pop("voxel_size", None)

@@ -7,6 +7,10 @@
  *   test_plugins default_broken               the same over a folder of broken plugins
  *   test_plugins octomap FILE.bt              the installed OctoMap reader plugin, found by itself
  *   test_plugins pcd FILE.pcd                 the installed PCL reader plugin
+ *   test_plugins auto FILE.bt WORKDIR         no load call: the first read of .bt loads the search path
+ *   test_plugins auto_off FILE.bt             the same with OCCSEG_NO_DEFAULT_PLUGINS=1: nothing loads
+ * The example scenario counts plugins around an explicit load and pins the errors of extensions
+ * nothing serves before it, so it runs with OCCSEG_NO_DEFAULT_PLUGINS=1 (tests/plugins/CMakeLists.txt).
  */
 #define _POSIX_C_SOURCE 200809L /* symlink, lstat */
 #include <occseg/occseg.h>
@@ -377,6 +381,57 @@ static void pcd(const char *file) {
   EXPECT_FAIL(occseg_map_read_options(&m, file, bad), OCCSEG_EINVAL, "voxel size -1", "plugin 'pcl_reader'", NULL);
 }
 
+/* A program that never calls a load function reads .bt as the occseg command does: the first read
+ * of an extension no loaded reader serves loads the default search path (the install's plugin
+ * folder, next to the installed liboccseg), once. An extension nothing serves names itself, the
+ * folders searched and what would help. */
+static void auto_load(const char *bt, const char *work) {
+  const uint32_t before = occseg_plugin_count();
+  occseg_map *m = NULL, *none = NULL;
+  size_t dims[3];
+  char path[4096], search[8192];
+  uint32_t after;
+  CHECK(getenv("OCCSEG_NO_DEFAULT_PLUGINS") == NULL);
+  CHECK(find_plugin("octomap_reader") < 0 && !find_stage(OCCSEG_STAGE_READER, ".bt", "octomap_reader"));
+  CHECK(occseg_map_read(&m, bt) == OCCSEG_OK);
+  CHECK(m && occseg_map_dims(m, dims) == OCCSEG_OK && dims[0] == 487 && dims[1] == 187 && dims[2] == 39);
+  CHECK(find_plugin("octomap_reader") >= 0 && find_plugin("pcl_reader") >= 0);
+  after = occseg_plugin_count();
+  CHECK(after >= before + 2);
+  occseg_map_free(m);
+  /* Loaded once: later reads and misses load nothing more. */
+  CHECK(occseg_map_read(&m, bt) == OCCSEG_OK);
+  occseg_map_free(m);
+  CHECK(occseg_plugin_search_path(search, sizeof search, NULL) == OCCSEG_OK);
+  snprintf(path, sizeof path, "%s/map.nosuchformat", work);
+  EXPECT_FAIL(occseg_map_read(&none, path), OCCSEG_EUNSUPPORTED, "no reader for extension '.nosuchformat'",
+              "occseg_plugins_load(", "OCCSEG_PLUGIN_PATH");
+  CHECK(strstr(occseg_last_error(), search) != NULL); /* the folders that were searched */
+  CHECK(none == NULL);
+  {
+    occseg_map *c = cube_map(0);
+    snprintf(path, sizeof path, "%s/map.occtxt", work);
+    EXPECT_FAIL(occseg_map_write(c, path), OCCSEG_EUNSUPPORTED, "no writer for extension '.occtxt'",
+                "no plugin of the default search path", "occseg_plugins_load(");
+    occseg_map_free(c);
+  }
+  CHECK(occseg_plugin_count() == after);
+}
+
+/* With OCCSEG_NO_DEFAULT_PLUGINS=1 nothing is loaded behind the caller's back: the error says why
+ * and which call loads the plugins, and that call then works. */
+static void auto_off(const char *bt) {
+  const uint32_t before = occseg_plugin_count();
+  occseg_map *m = NULL;
+  CHECK(getenv("OCCSEG_NO_DEFAULT_PLUGINS") != NULL);
+  EXPECT_FAIL(occseg_map_read(&m, bt), OCCSEG_EUNSUPPORTED, "no reader for extension '.bt'",
+              "OCCSEG_NO_DEFAULT_PLUGINS is set", "occseg_plugins_load_default()");
+  CHECK(m == NULL && occseg_plugin_count() == before && find_plugin("octomap_reader") < 0);
+  CHECK(occseg_plugins_load_default(NULL) == OCCSEG_OK);
+  CHECK(occseg_map_read(&m, bt) == OCCSEG_OK);
+  occseg_map_free(m);
+}
+
 int main(int argc, char **argv) {
   if (argc == 4 && strcmp(argv[1], "example") == 0) example(argv[2], argv[3]);
   else if (argc == 3 && strcmp(argv[1], "errors") == 0) errors(argv[2]);
@@ -384,6 +439,8 @@ int main(int argc, char **argv) {
   else if (argc == 2 && strcmp(argv[1], "default_broken") == 0) default_broken();
   else if (argc == 3 && strcmp(argv[1], "octomap") == 0) octomap(argv[2]);
   else if (argc == 3 && strcmp(argv[1], "pcd") == 0) pcd(argv[2]);
+  else if (argc == 4 && strcmp(argv[1], "auto") == 0) auto_load(argv[2], argv[3]);
+  else if (argc == 3 && strcmp(argv[1], "auto_off") == 0) auto_off(argv[2]);
   else {
     fprintf(stderr, "usage: test_plugins example SO WORKDIR | errors DIR | default | octomap FILE.bt\n");
     return 2;
