@@ -92,7 +92,8 @@ Grid integrate_scan_graph(const octomap::ScanGraph& graph, const ScanOptions& op
   auto pose_of = [&](const octomap::ScanNode& n) {
     if (options.sensor_pose) return *options.sensor_pose;
     const octomath::Quaternion& q = n.pose.rot();
-    return make_pose({n.pose.trans().x(), n.pose.trans().y(), n.pose.trans().z()}, {q.u(), q.x(), q.y(), q.z()});
+    return options.pose_for(
+        make_pose({n.pose.trans().x(), n.pose.trans().y(), n.pose.trans().z()}, {q.u(), q.x(), q.y(), q.z()}));
   };
   auto points = [](const octomap::ScanNode& n) -> const float* {
     return n.scan && n.scan->size() ? &(*n.scan)[0](0) : nullptr;
