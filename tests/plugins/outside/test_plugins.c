@@ -354,11 +354,23 @@ static void octomap(const char *bt) {
     occseg_map *c = NULL;
     EXPECT_FAIL(occseg_map_read(&c, "no/such/file.bt"), OCCSEG_EIO, "no/such/file.bt", NULL, NULL);
   }
+  /* The scan graph beside it takes the pose options of the command's .graph input too. */
+  {
+    char graph[4096];
+    const char *slash = strrchr(bt, '/');
+    const char *opts[] = {"sensor_origin=0,0,0", "sensor_orientation=1,0,0,0", NULL};
+    occseg_map *g = NULL;
+    snprintf(graph, sizeof graph, "%.*s/spherical_scan.graph", slash ? (int)(slash - bt) : 1, slash ? bt : ".");
+    CHECK(occseg_map_read_options(&g, graph, opts) == OCCSEG_OK);
+    occseg_map_free(g);
+  }
   /* And it segments. */
   CHECK(m && occseg_segment(&r, m, NULL) == OCCSEG_OK && occseg_result_segment_count(r) > 1);
   occseg_result_free(r);
   occseg_map_free(m);
 }
+
+static void pose_options(const char *file);
 
 static void pcd(const char *file) {
   const char *opts[] = {"voxel_size=0.1", NULL}, *bad[] = {"voxel_size=-1", NULL};
@@ -379,6 +391,51 @@ static void pcd(const char *file) {
   occseg_map_free(m);
   m = NULL;
   EXPECT_FAIL(occseg_map_read_options(&m, file, bad), OCCSEG_EINVAL, "voxel size -1", "plugin 'pcl_reader'", NULL);
+  pose_options(file);
+}
+
+/* Reads `file` with `opt` (and voxel_size=0.1); its values (malloc'd) and dims, or NULL. */
+static float *read_values(const char *file, const char *opt, size_t dims[3]) {
+  const char *opts[] = {"voxel_size=0.1", opt, NULL};
+  occseg_map *m = NULL;
+  float *v = NULL;
+  if (occseg_map_read_options(&m, file, opts) == OCCSEG_OK && occseg_map_dims(m, dims) == OCCSEG_OK) {
+    v = (float *)malloc(dims[0] * dims[1] * dims[2] * sizeof *v);
+    if (v && occseg_map_values(m, v, dims[0] * dims[1] * dims[2]) != OCCSEG_OK) {
+      free(v);
+      v = NULL;
+    }
+  }
+  occseg_map_free(m);
+  return v;
+}
+
+static int same_values(const float *a, const size_t da[3], const float *b, const size_t db[3]) {
+  return a && b && da[0] == db[0] && da[1] == db[1] && da[2] == db[2] &&
+         memcmp(a, b, da[0] * da[1] * da[2] * sizeof *a) == 0;
+}
+
+/* sensor_origin and sensor_orientation each replace their half of the stored pose, as the
+ * command's --sensor-origin and --sensor-orientation do (issue 26): the table scene is seen from
+ * the origin turned 180 degrees about x (VIEWPOINT 0 0 0 0 1 0 0), so the origin alone, or that
+ * turn alone, gives the stored map, and no turn another one. */
+static void pose_options(const char *file) {
+  size_t d0[3], d1[3], d2[3], d3[3];
+  float *stored = read_values(file, NULL, d0), *origin = read_values(file, "sensor_origin=0,0,0", d1);
+  float *turn = read_values(file, "sensor_orientation=0,1,0,0", d2), *none = read_values(file, "sensor_orientation=1,0,0,0", d3);
+  occseg_map *m = NULL;
+  const char *zero[] = {"sensor_orientation=0,0,0,0", NULL}, *three[] = {"sensor_orientation=1,0,0", NULL};
+  CHECK(stored != NULL && origin != NULL && turn != NULL && none != NULL);
+  CHECK(same_values(stored, d0, origin, d1));
+  CHECK(same_values(stored, d0, turn, d2));
+  CHECK(none && !same_values(stored, d0, none, d3));
+  EXPECT_FAIL(occseg_map_read_options(&m, file, zero), OCCSEG_EINVAL, "sensor_orientation", "no rotation", NULL);
+  EXPECT_FAIL(occseg_map_read_options(&m, file, three), OCCSEG_EINVAL, "sensor_orientation", "needs 4", NULL);
+  CHECK(m == NULL);
+  free(stored);
+  free(origin);
+  free(turn);
+  free(none);
 }
 
 /* A program that never calls a load function reads .bt as the occseg command does: the first read
