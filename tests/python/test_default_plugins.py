@@ -102,3 +102,28 @@ except occseg.OccsegError as e:
     search, message = r.stdout.splitlines()
     for part in ("'.nosuchformat'", search, "occseg_plugins_load(", "OCCSEG_PLUGIN_PATH", "occseg.load_plugin(path)"):
         assert part in message, (part, message)
+
+
+def test_pcd_pose_options_replace_one_half_each():
+    # read_map takes the pose as the command's --sensor-origin / --sensor-orientation do: each
+    # replaces its half of the VIEWPOINT (the table scene: the origin, turned 180 degrees about x).
+    r = fresh(f"""
+import numpy as np, occseg
+f = {os.path.join(DATA, 'table_scene_mug_stereo_textured.pcd')!r}
+def values(**kw):
+    with occseg.read_map(f, voxel_size=0.1, **kw) as m:
+        return m.dims, m.origin, m.to_array()
+stored = values()
+for kw in (dict(sensor_origin=(0, 0, 0)), dict(sensor_orientation=(0, 1, 0, 0))):
+    got = values(**kw)
+    assert got[:2] == stored[:2] and np.array_equal(got[2], stored[2]), kw
+none = values(sensor_orientation=(1, 0, 0, 0))
+assert none[:2] != stored[:2]
+try:
+    values(sensor_orientation=(0, 0, 0, 0))
+except occseg.OccsegError as e:
+    assert e.status == occseg.Status.EINVAL and "sensor_orientation" in e.message, e
+else:
+    raise SystemExit("a zero quaternion was accepted")
+""")
+    assert r.returncode == 0, r.stderr
