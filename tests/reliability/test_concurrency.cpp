@@ -257,6 +257,38 @@ TEST(Concurrency, PluginsLoadWhileOtherThreadsSegmentAndEnumerate) {
 }
 #endif
 
+#ifdef OCCSEG_BROKEN_PLUGINS
+TEST(Concurrency, FirstReadsRacingToLoadTheSearchPathAllFindItsReader) {
+  // The same race in every build (the ThreadSanitizer one has no OctoMap): the search path is the
+  // folder of broken plugins, where only "misbehaving" loads; its reader of .nomap returns no
+  // map. Eight threads' first reads of a .nomap start at once: each must reach that reader (the
+  // load finished before any of them looked again), and the plugin is registered once.
+  const int rc = in_child([&] {
+    ::setenv("OCCSEG_PLUGIN_PATH", OCCSEG_BROKEN_PLUGINS, 1);
+    ::unsetenv("OCCSEG_NO_DEFAULT_PLUGINS");
+    std::atomic<int> ready{0}, wrong{0};
+    std::vector<std::thread> pool;
+    for (int i = 0; i < kThreads; ++i)
+      pool.emplace_back([&] {
+        ready.fetch_add(1);
+        while (ready.load() < kThreads) {
+        }
+        occseg_map* m = nullptr;
+        const int status = occseg_map_read(&m, "whatever.nomap");
+        if (status != OCCSEG_EPLUGIN || !std::strstr(occseg_last_error(), "the reader returned no map") || m)
+          wrong.fetch_add(1);
+        occseg_map_free(m);
+      });
+    for (auto& t : pool) t.join();
+    int copies = 0;
+    for (std::uint32_t k = 0; k < occseg_plugin_count(); ++k)
+      copies += std::strcmp(occseg_plugin_name(k), "misbehaving") == 0;
+    return wrong.load() ? 1 : copies != 1 ? 2 : 0;
+  });
+  EXPECT_EQ(rc, 0) << "1: a read did not reach the plugin's reader, 2: the plugin is not registered exactly once";
+}
+#endif
+
 #ifdef OCCSEG_READER_PLUGIN
 TEST(Concurrency, FirstReadsOfAPluginFormatLoadTheSearchPathOnce) {
   // No load call: the first reads of .bt load the default search path (here the folder of the
