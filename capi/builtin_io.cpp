@@ -39,9 +39,10 @@ int guarded(const occseg_plugin_call* call, Body&& body) {
   }
 }
 
-// Options of the built-in readers: only voxel_size (for .npy, which stores none).
-double voxel_size_option(const char* path, const char* const* options, bool allowed) {
-  double v = 1.0;
+// Options of the built-in readers: only voxel_size (.npy, which stores none: default 1; .nrrd,
+// overriding the file's spacing: `fallback` 0 there means "not given").
+double voxel_size_option(const char* path, const char* const* options, bool allowed, double fallback = 1.0) {
+  double v = fallback;
   for (const char* const* o = options; o && *o; ++o) {
     const char* eq = std::strchr(*o, '=');
     if (allowed && eq && std::strncmp(*o, "voxel_size", static_cast<size_t>(eq - *o)) == 0 && eq - *o == 10) {
@@ -84,9 +85,14 @@ int read_npy_map(const occseg_plugin_call* call, const char* path, const char* c
 
 int read_nrrd_map(const occseg_plugin_call* call, const char* path, const char* const* options, occseg_plugin_map_sink* sink) {
   return guarded(call, [&] {
-    voxel_size_option(path, options, false);
+    const double vs = voxel_size_option(path, options, true, 0.0);
     const occseg::NrrdVolume v = occseg::read_nrrd(path);
-    deliver(call, sink, occseg::grid_from_nrrd(v, path));
+    Grid g = occseg::grid_from_nrrd(v, path);
+    if (vs > 0) {  // as the command's --voxel-size: the file's spacing replaced, the first voxel centre kept
+      for (double& c : g.origin) c += (g.voxel_size - vs) / 2;
+      g.voxel_size = vs;
+    }
+    deliver(call, sink, g);
     occseg::capi::nrrd_space_slot() = v.space;  // the map keeps the file's space (occseg_map_read)
   });
 }
@@ -116,7 +122,9 @@ int register_io(const occseg_plugin_host* host, occseg_plugin_registrar* r) {
   const occseg_plugin_reader readers[] = {
       {sizeof(occseg_plugin_reader), ".npy", "NumPy array [z, y, x] or [y, x]: f4, f8, u1, u2 (option voxel_size, default 1)",
        read_npy_map, nullptr},
-      {sizeof(occseg_plugin_reader), ".nrrd", "NRRD volume (raw or ascii) with its spacing and origin", read_nrrd_map, nullptr},
+      {sizeof(occseg_plugin_reader), ".nrrd",
+       "NRRD volume (raw or ascii) with its spacing and origin (option voxel_size replaces the spacing)", read_nrrd_map,
+       nullptr},
       {sizeof(occseg_plugin_reader), ".yaml",
        "ROS map_server / Nav2 2D map: YAML with a PGM image (P5 8/16-bit, P2), resolution, origin, thresholds",
        read_yaml_map, nullptr},

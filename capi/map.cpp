@@ -79,9 +79,11 @@ T load(const char* p) {
   const char* what = std::isnan(v) ? "is NaN" : (std::isinf(v) ? "is infinite" : "is outside [0, 1]");
   char t[64];
   std::snprintf(t, sizeof t, "%.9g", v);
+  // The one flag that accepts this value (the Python bindings put their keyword in its place).
+  const char* fix = std::isnan(v) ? " (pass OCCSEG_IMPORT_NAN_UNKNOWN to read it as unknown)"
+                                  : " (pass OCCSEG_IMPORT_CLAMP to clamp it to [0, 1])";
   throw Error(Status::bad_value, "data: probability at voxel (" + std::to_string(x) + ", " + std::to_string(y) +
-                                     ", " + std::to_string(z) + ") = " + t + " " + what +
-                                     " (pass OCCSEG_IMPORT_CLAMP or OCCSEG_IMPORT_NAN_UNKNOWN to accept it)");
+                                     ", " + std::to_string(z) + ") = " + t + " " + what + fix);
 }
 
 // One F32/F64 value as a probability, per the import flags.

@@ -1,8 +1,11 @@
 // occseg_plugin*, occseg_stage*, occseg_param_plugin/_default and the extension-dispatching map
 // readers and writers: the C face of the registry (occseg/registry.hpp).
-#include <string>
+#include <atomic>
+#include <cstdlib>
 #include <cstring>
 #include <memory>
+#include <mutex>
+#include <string>
 
 #include "internal.hpp"
 #include "occseg/occseg_plugin.h"
@@ -67,6 +70,87 @@ std::vector<std::string> option_list(const char* const* options) {
   return v;
 }
 
+// The default plugin search path, loaded at most once per process: by the first read or write
+// whose extension nothing registered serves (as the occseg command loads it at start), or by an
+// explicit occseg_plugins_load_default. `done` is set (release) only after `failures` is final,
+// so a reader that sees it (acquire) may read `failures` without the mutex.
+struct DefaultPlugins {
+  std::mutex mutex;
+  std::atomic<bool> done{false};
+  std::string failures;  // "; "-joined errors of that load
+};
+
+DefaultPlugins& default_plugins() {
+  static DefaultPlugins d;
+  return d;
+}
+
+// OCCSEG_NO_DEFAULT_PLUGINS set to anything but "" or "0" turns the loading on first use off.
+bool auto_load_disabled() {
+  const char* v = std::getenv("OCCSEG_NO_DEFAULT_PLUGINS");
+  return v && *v && std::strcmp(v, "0") != 0;
+}
+
+std::string joined(const std::vector<std::string>& v) {
+  std::string all;
+  for (const auto& e : v) all += (all.empty() ? "" : "; ") + e;
+  return all;
+}
+
+// Runs occseg::load_default_plugins() and marks the search path as loaded; with `once`, only if
+// no call has loaded it yet (threads racing to the first read wait for the one that loads).
+occseg::PluginLoadReport load_defaults(bool once) {
+  DefaultPlugins& d = default_plugins();
+  const std::lock_guard<std::mutex> lock(d.mutex);
+  if (once && d.done.load(std::memory_order_relaxed)) return {};
+  occseg::PluginLoadReport r = occseg::load_default_plugins();
+  if (!d.done.load(std::memory_order_relaxed)) {
+    d.failures = joined(r.errors);
+    d.done.store(true, std::memory_order_release);
+  }
+  return r;
+}
+
+std::string search_path_text() {
+  std::string s;
+  for (const auto& dir : occseg::plugin_search_path()) s += (s.empty() ? "" : ":") + dir;
+  return s;
+}
+
+// Called when no reader (writer) serves `ext`: loads the default search path once, unless turned
+// off. Returns "" when a reader (writer) is registered now, else the text the error gets: what was
+// searched and the call or variable that would help.
+std::string serve_extension(const std::string& ext, bool reader) {
+  auto served = [&] { return reader ? occseg::find_reader(ext) != nullptr : occseg::find_writer(ext) != nullptr; };
+  if (ext.empty() || served()) return "";
+  DefaultPlugins& d = default_plugins();
+  if (!d.done.load(std::memory_order_acquire) && auto_load_disabled()) {
+    return "; the default plugin search path (" + search_path_text() +
+           ") was not loaded because OCCSEG_NO_DEFAULT_PLUGINS is set: call occseg_plugins_load_default() or "
+           "occseg_plugins_load(\"/path/to/plugin.so\")";
+  }
+  if (!d.done.load(std::memory_order_acquire)) load_defaults(true);
+  if (served()) return "";
+  std::string hint = "; no plugin of the default search path (" + search_path_text() + ") " +
+                     (reader ? "reads" : "writes") +
+                     " it: load one with occseg_plugins_load(\"/path/to/plugin.so\") or put its folder on "
+                     "OCCSEG_PLUGIN_PATH";
+  if (!d.failures.empty()) hint += " (plugins that failed to load: " + d.failures + ")";
+  return hint;
+}
+
+// The registry's "no reader/writer" error, with `hint` appended; other errors as they are.
+template <class Body>
+void with_hint(const std::string& hint, Body&& body) {
+  if (hint.empty()) return body();
+  try {
+    body();
+  } catch (const Error& e) {
+    if (e.status() != Status::unsupported) throw;
+    throw Error(e.status(), e.what() + hint);
+  }
+}
+
 }  // namespace
 
 extern "C" {
@@ -81,13 +165,9 @@ int occseg_plugins_load(const char* path) {
 int occseg_plugins_load_default(uint32_t* loaded) {
   return guard("occseg_plugins_load_default", [&] {
     if (loaded) *loaded = 0;
-    const occseg::PluginLoadReport r = occseg::load_default_plugins();
+    const occseg::PluginLoadReport r = load_defaults(false);
     if (loaded) *loaded = static_cast<uint32_t>(r.loaded.size());
-    if (!r.errors.empty()) {
-      std::string all;
-      for (const auto& e : r.errors) all += (all.empty() ? "" : "; ") + e;
-      throw Error(Status::plugin, all);
-    }
+    if (!r.errors.empty()) throw Error(Status::plugin, joined(r.errors));
   });
 }
 
@@ -185,7 +265,9 @@ int occseg_map_read_options(occseg_map** out, const char* path, const char* cons
     require(path, "path");
     auto m = std::make_unique<occseg_map>();
     const occseg::capi::NrrdSpaceScope space;  // the built-in .nrrd reader reports the file's space
-    m->grid = occseg::read_map(path, option_list(options));
+    const std::string ext = occseg::file_extension(path);
+    const std::string hint = occseg::find_reader(ext) ? "" : serve_extension(ext, true);
+    with_hint(hint, [&] { m->grid = occseg::read_map(path, option_list(options)); });
     try {  // a plugin's reader too: every map the C ABI hands out can be written and read back
       occseg::check_geometry(m->grid);
     } catch (const Error& e) {
@@ -201,7 +283,9 @@ int occseg_map_write_options(const occseg_map* map, const char* path, const char
     require(map, "map");
     require(path, "path");
     const occseg::capi::NrrdSpaceScope space(map->nrrd_space);  // for the built-in .nrrd writer
-    occseg::write_map(path, map->grid, option_list(options));
+    const std::string ext = occseg::file_extension(path);
+    const std::string hint = occseg::find_writer(ext) ? "" : serve_extension(ext, false);
+    with_hint(hint, [&] { occseg::write_map(path, map->grid, option_list(options)); });
   });
 }
 

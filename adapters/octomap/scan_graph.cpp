@@ -6,6 +6,7 @@
 #include <cstring>
 #include <istream>
 #include <limits>
+#include <memory>
 #include <string>
 
 #include "occseg/error.hpp"
@@ -91,7 +92,8 @@ Grid integrate_scan_graph(const octomap::ScanGraph& graph, const ScanOptions& op
   auto pose_of = [&](const octomap::ScanNode& n) {
     if (options.sensor_pose) return *options.sensor_pose;
     const octomath::Quaternion& q = n.pose.rot();
-    return make_pose({n.pose.trans().x(), n.pose.trans().y(), n.pose.trans().z()}, {q.u(), q.x(), q.y(), q.z()});
+    return options.pose_for(
+        make_pose({n.pose.trans().x(), n.pose.trans().y(), n.pose.trans().z()}, {q.u(), q.x(), q.y(), q.z()}));
   };
   auto points = [](const octomap::ScanNode& n) -> const float* {
     return n.scan && n.scan->size() ? &(*n.scan)[0](0) : nullptr;
@@ -122,23 +124,47 @@ Grid read_scan_graph(const std::string& path, const ScanOptions& options) {
   options.validate();
   const std::string bytes = read_file(path);
   GraphChecker{bytes, path}.run();
-  // OctoMap reads the checked bytes, not the file a second time (which may have changed since).
-  // Node by node as ScanGraph::readBinary does (ScanNode::readBinary); the edges are left out,
-  // since the fusion uses the scans and their poses only.
+  // The graph is built from the checked bytes, not the file a second time (which may have
+  // changed since), and not by ScanNode::readBinary: liboctomap's Pointcloud::readBinary prints
+  // "Reading N points from binary file...done." on stderr, which a library must keep out of its
+  // host's streams. The values are converted as liboctomap's readers convert them
+  // (Vector3::readBinary and Quaternion::readBinary: each double to float), node by node as
+  // ScanGraph::readBinary reads them; the edges are left out, since the fusion uses the scans and
+  // their poses only.
   octomap::ScanGraph graph;
   {
-    BytesBuf buf(bytes);
-    std::istream in(&buf);
-    std::uint32_t nodes = 0;
-    in.read(reinterpret_cast<char*>(&nodes), sizeof nodes);
-    for (std::uint32_t i = 0; i < nodes && in; ++i) {
-      octomap::ScanNode n;
-      n.readBinary(in);
-      if (!in) break;
-      graph.addNode(n.scan, n.pose);  // the graph takes the scan
-      n.scan = nullptr;
+    std::size_t pos = 0;
+    auto u32 = [&] {
+      std::uint32_t v;
+      std::memcpy(&v, bytes.data() + pos, 4);
+      pos += 4;
+      return v;
+    };
+    auto real = [&] {
+      double v;
+      std::memcpy(&v, bytes.data() + pos, 8);
+      pos += 8;
+      return static_cast<float>(v);  // finite values are within the float range (checked)
+    };
+    const std::uint32_t nodes = u32();
+    for (std::uint32_t i = 0; i < nodes; ++i) {
+      const std::uint32_t n = u32();
+      auto scan = std::make_unique<octomap::Pointcloud>();
+      scan->reserve(n);
+      for (std::uint32_t k = 0; k < n; ++k) {
+        pos += 4;  // the vector's tag, 3 (checked)
+        const float x = real(), y = real(), z = real();
+        scan->push_back(x, y, z);
+      }
+      pos += 4;
+      const float tx = real(), ty = real(), tz = real();
+      pos += 4;
+      const float qu = real(), qx = real(), qy = real(), qz = real();
+      u32();  // the node id: unused by the fusion (addNode numbers the nodes in file order)
+      graph.addNode(scan.get(), octomap::pose6d(octomath::Vector3(tx, ty, tz), octomath::Quaternion(qu, qx, qy, qz)));
+      scan.release();  // owned by the graph's node now
     }
-    if (!in || graph.size() != nodes) bad(path, "OctoMap could not read the checked scans");
+    if (graph.size() != nodes) bad(path, "OctoMap could not read the checked scans");
   }
   try {
     return integrate_scan_graph(graph, options);

@@ -21,6 +21,17 @@ void ScanOptions::validate() const {
   if (bbox) frame_for_box(*bbox, voxel_size);
   if (sensor_pose && !sensor_pose->matrix().allFinite())
     throw Error(Status::bad_value, "sensor pose is not finite");
+  if (sensor_origin || sensor_orientation)  // make_pose names a non-finite value or a zero quaternion
+    make_pose(sensor_origin.value_or(Vec3{0, 0, 0}), sensor_orientation.value_or(std::array<double, 4>{1, 0, 0, 0}));
+}
+
+Eigen::Isometry3d ScanOptions::pose_for(const Eigen::Isometry3d& stored) const {
+  if (sensor_pose) return *sensor_pose;
+  if (!sensor_origin && !sensor_orientation) return stored;
+  Eigen::Isometry3d pose = stored;
+  if (sensor_orientation) pose.linear() = make_pose({0, 0, 0}, *sensor_orientation).linear();
+  if (sensor_origin) pose.translation() = Eigen::Vector3d((*sensor_origin)[0], (*sensor_origin)[1], (*sensor_origin)[2]);
+  return pose;
 }
 
 GridFrame frame_for_box(const Box& box, double voxel_size) {

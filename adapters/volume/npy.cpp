@@ -1,5 +1,6 @@
 #include "occseg/npy.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -210,8 +211,15 @@ NpyArray parse_npy(const unsigned char* b, std::size_t size, const std::string& 
   const std::string h(reinterpret_cast<const char*>(b + off), hlen);
   NpyArray a;
   HeaderParser(h, name, major <= 2).parse(a);
+  // Big-endian data ('>f4', '>f8', '>u2', ..., as NumPy writes arrays of that byte order, and
+  // NumPy's np.load reads back) is swapped to little-endian below; '>u1' holds single bytes.
+  if (a.descr.size() > 1 && a.descr[0] == '>' && item_size("<" + a.descr.substr(1))) {
+    a.descr[0] = '<';
+    a.big_endian = true;
+    if (a.descr == "<u1") a.descr = "|u1";
+  }
   const std::size_t isz = item_size(a.descr);
-  if (!isz) fail(name, "dtype '" + printable(a.descr) + "' is not supported (use float32, float64, uint8 or uint16)");
+  if (!isz) fail(name, "dtype '" + printable(a.descr) + "' is not supported (use float32, float64, uint8 or uint16, either byte order)");
   std::size_t count = 1;
   for (const std::size_t v : a.shape) {
     if (v != 0 && count > kMaxVoxels / v) fail(name, "shape claims more than 2^40 elements");
@@ -222,6 +230,8 @@ NpyArray parse_npy(const unsigned char* b, std::size_t size, const std::string& 
   if (body < need)
     fail(name, "truncated data: header promises " + std::to_string(need) + " bytes, file has " + std::to_string(body));
   a.data.assign(b + off + hlen, b + off + hlen + need);
+  if (a.big_endian && isz > 1)
+    for (std::size_t i = 0; i < need; i += isz) std::reverse(a.data.begin() + i, a.data.begin() + i + isz);
   return a;
 }
 

@@ -85,3 +85,11 @@ def real(who, name, value):
         return float(value)
     except OverflowError:
         raise OccsegValueError(Status.EVALUE, f"{who}: {name} = {value} is too large for a double") from None
+
+
+def flag(who, name, value):
+    """A switch: True or False (Python or NumPy bool); anything else, which would be taken for its
+    truth value (the text "no" as true), is refused."""
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise OccsegTypeError(Status.EINVAL, f"{who}: {name} must be True or False, not {type(value).__name__}")

@@ -53,7 +53,9 @@ class _Handle:
         _count(self.kind, -1)
 
     def closed_error(self):
-        return ValueError(f"{self.what}: the {self.what.split('.')[-1].lower()} is closed")
+        # An OccsegValueError: a ValueError, as a closed file's, and an occseg error like every
+        # other bad argument.
+        return OccsegValueError(Status.EINVAL, f"{self.what}: the {self.what.split('.')[-1].lower()} is closed")
 
     def acquire(self):
         with self.lock:

@@ -3,7 +3,7 @@ import ctypes
 
 import numpy as np
 
-from ._args import path_bytes, real
+from ._args import flag, path_bytes, real
 from ._errors import OccsegError, OccsegTypeError, OccsegValueError, Status, check
 from ._handles import Owned
 from ._lib import c_double3, c_ptrdiff3, c_size3, has, lib
@@ -21,7 +21,10 @@ _EMPTY = ctypes.c_char(0)  # a valid address for zero-size arrays, so the C ABI 
 def as_voxel_array(probabilities, who):
     """`probabilities` as an ndarray [z, y, x] or [y, x] of an accepted dtype: the caller's own
     array whenever possible (any strides); a copy only for foreign byte order or non-arrays."""
-    arr = np.asarray(probabilities)
+    try:
+        arr = np.asarray(probabilities)
+    except (ValueError, TypeError) as e:  # a ragged list, say: NumPy's own error, as an occseg one
+        raise OccsegValueError(Status.EINVAL, f"{who}: probabilities: not an array ({e})") from None
     if arr.dtype.byteorder not in ("=", "|") and arr.dtype.newbyteorder("=") in _DTYPES:
         arr = arr.astype(arr.dtype.newbyteorder("="))  # big-endian data: the C ABI reads native
     if arr.dtype not in _DTYPES:
@@ -78,10 +81,16 @@ class Map(Owned):
         arr = as_voxel_array(probabilities, "occseg_map_from_buffer")
         vs = real("occseg.Map.from_array", "voxel_size", voxel_size)
         o = None if origin is None else _origin_arg("occseg.Map.from_array", origin)
+        flags = (_IMPORT_CLAMP if flag("occseg.Map.from_array", "clamp", clamp) else 0) | \
+            (_IMPORT_NAN_UNKNOWN if flag("occseg.Map.from_array", "nan_unknown", nan_unknown) else 0)
         data, dtype, dims, strides = buffer_args(arr)
-        flags = (_IMPORT_CLAMP if clamp else 0) | (_IMPORT_NAN_UNKNOWN if nan_unknown else 0)
         out = ctypes.c_void_p()
-        check(lib.occseg_map_from_buffer_flags(ctypes.byref(out), data, dtype, dims, strides, vs, flags))
+        try:
+            check(lib.occseg_map_from_buffer_flags(ctypes.byref(out), data, dtype, dims, strides, vs, flags))
+        except OccsegError as e:
+            if e.status != Status.EVALUE or "OCCSEG_IMPORT_" not in e.message:
+                raise
+            raise OccsegError(e.code, _python_flags(e.message)) from None
         return _configured(cls(out), None, o)
 
     @property
@@ -130,7 +139,7 @@ class Map(Owned):
         p = path_bytes("occseg.Map.write", "path", path)
         if has("occseg_map_write_options"):
             opts = option_array("occseg_map_write", options)
-            self._call(lambda h: check(lib.occseg_map_write_options(h, p, opts)))
+            _plugin_hint(lambda: self._call(lambda h: check(lib.occseg_map_write_options(h, p, opts))))
         elif options:
             raise OccsegError(Status.EUNSUPPORTED, "occseg_map_write: options need a liboccseg with "
                                                    "occseg_map_write_options")
@@ -149,6 +158,13 @@ class Map(Owned):
                         f"origin={map_origin(h)}>")
         except ValueError:
             return "<occseg.Map closed>"
+
+
+def _python_flags(message):
+    """The C error of a value only an import flag accepts, with the keyword that sets that flag in
+    place of the flag's C name (the C text names OCCSEG_IMPORT_NAN_UNKNOWN for a NaN and
+    OCCSEG_IMPORT_CLAMP for a value outside [0, 1])."""
+    return message.replace("OCCSEG_IMPORT_NAN_UNKNOWN", "nan_unknown=True").replace("OCCSEG_IMPORT_CLAMP", "clamp=True")
 
 
 # The queries of a map, on a C pointer the caller holds a use of.
@@ -182,15 +198,31 @@ def _origin_arg(who, value):
     return tuple(real(who, f"origin[{k}]", v) for k, v in enumerate(items))
 
 
+def _plugin_hint(call):
+    """Runs `call` (a check() of a read or write); an extension no reader or writer serves gets the
+    Python spelling of the C error's advice added (the library has already searched the default
+    plugin path by then, unless OCCSEG_NO_DEFAULT_PLUGINS is set)."""
+    try:
+        call()
+    except OccsegError as e:
+        if e.status != Status.EUNSUPPORTED or not ("no reader for" in e.message or "no writer for" in e.message):
+            raise
+        raise OccsegError(e.code, e.message + "; from Python: occseg.load_plugin(path) or "
+                                              "occseg.load_default_plugins()") from None
+
+
 def read_map(path, **options):
     """Reads a map through the library's readers (occseg_map_read_options): the extension picks
-    the reader (.npy and .nrrd built in, more from plugins), and each keyword becomes a reader
+    the reader (.npy, .nrrd and .yaml built in, more from plugins: the first read of an extension
+    no loaded reader serves loads the default plugin search path, unless OCCSEG_NO_DEFAULT_PLUGINS
+    is set, so .bt, .ot, .graph and .pcd are read without a load call), and each keyword becomes a reader
     option "key=value" (e.g. voxel_size=0.05 for .npy; a reader refuses keys it does not know).
     A library older than the plugin interface reads .npy only, and takes voxel_size only."""
     out = ctypes.c_void_p()
     p = path_bytes("occseg.read_map", "path", path)
     if has("occseg_map_read_options"):
-        check(lib.occseg_map_read_options(ctypes.byref(out), p, option_array("occseg_map_read", options)))
+        opts = option_array("occseg_map_read", options)
+        _plugin_hint(lambda: check(lib.occseg_map_read_options(ctypes.byref(out), p, opts)))
         return Map(out)
     options = dict(options)
     voxel_size = options.pop("voxel_size", None)

@@ -2,9 +2,9 @@
 import contextlib
 import ctypes
 
-from ._args import text_bytes
+from ._args import flag, text_bytes
 from ._context import Context
-from ._errors import OccsegError, Status, check
+from ._errors import OccsegError, OccsegTypeError, Status, check
 from ._handles import Owned
 from ._lib import PROGRESS_FN, lib
 from ._map import Map, as_voxel_array, map_dims, map_origin, map_voxel_size
@@ -66,10 +66,13 @@ def segment(probabilities, preset="default", threads=0, *, voxel_size=None, orig
     once the C call has returned; this call finishes normally."""
     who = "occseg.segment"
     preset_text = text_bytes(who, "preset", preset)
+    if progress is not None and not callable(progress):
+        raise OccsegTypeError(Status.EINVAL, f"{who}: progress must be a callable (stage, fraction) or None, "
+                                             f"not {type(progress).__name__}")
     if context is not None and not isinstance(context, Context):
-        raise OccsegError(Status.EINVAL, f"{who}: context must be an occseg.Context, not {type(context).__name__}")
+        raise OccsegTypeError(Status.EINVAL, f"{who}: context must be an occseg.Context, not {type(context).__name__}")
     if isinstance(probabilities, Map):
-        if voxel_size is not None or origin is not None or clamp or nan_unknown:
+        if voxel_size is not None or origin is not None or flag(who, "clamp", clamp) or flag(who, "nan_unknown", nan_unknown):
             raise OccsegError(Status.EINVAL, "occseg.segment: voxel_size, origin, clamp and nan_unknown apply to "
                                              "arrays; a Map carries its own voxel size and origin")
         m, temporary = probabilities, False

@@ -65,6 +65,22 @@ class Options {
   std::map<std::string, std::string> values_;
 };
 
+// The options sensor_origin=x,y,z and sensor_orientation=w,x,y,z of the readers that fuse scans
+// (occseg/scan_options.hpp, included by the plugin before this header): each replaces its half of
+// the stored pose. A zero or non-finite quaternion fails when the options are validated.
+template <class ScanOptionsT>
+void sensor_pose_options(const Options& o, ScanOptionsT& s) {
+  if (o.has("sensor_origin")) {
+    const std::vector<double> v = o.numbers("sensor_origin", 3);
+    s.sensor_origin = std::array<double, 3>{v[0], v[1], v[2]};
+  }
+  if (o.has("sensor_orientation")) {
+    const std::vector<double> v = o.numbers("sensor_orientation", 4);
+    if (v == std::vector<double>{0, 0, 0, 0}) o.fail("option sensor_orientation: 0,0,0,0 is no rotation (give w,x,y,z, e.g. 1,0,0,0)");
+    s.sensor_orientation = std::array<double, 4>{v[0], v[1], v[2], v[3]};
+  }
+}
+
 // Hands a grid to the host (map_alloc + copy).
 inline void deliver(const occseg_plugin_call* call, occseg_plugin_map_sink* sink, const Grid& g) {
   const size_t dims[3] = {g.dims.nx, g.dims.ny, g.dims.nz};

@@ -2,7 +2,8 @@
 // through liboccseg_octomap, so that C programs read them without linking OctoMap.
 //   .bt/.ot options:  voxel_size (a multiple of the tree's resolution; default: the resolution),
 //                     coarsen=max|mean, bbox=xmin,ymin,zmin,xmax,ymax,zmax (metres)
-//   .graph options:   voxel_size (default 0.05), max_range, margin, bbox
+//   .graph options:   voxel_size (default 0.05), max_range, margin, bbox, sensor_origin=x,y,z and
+//                     sensor_orientation=w,x,y,z (each replaces its half of every node's pose)
 #include "occseg/octomap_file.hpp"
 #include "plugin_options.hpp"
 
@@ -31,12 +32,14 @@ int read_tree(const occseg_plugin_call* call, const char* path, const char* cons
 
 int read_graph(const occseg_plugin_call* call, const char* path, const char* const* options, occseg_plugin_map_sink* sink) {
   return occseg::plugin::guarded(call, [&] {
-    const Options o(path, options, {"voxel_size", "max_range", "margin", "bbox"});
+    const Options o(path, options,
+                    {"voxel_size", "max_range", "margin", "bbox", "sensor_origin", "sensor_orientation"});
     occseg::ScanOptions s;
     s.voxel_size = o.number("voxel_size", s.voxel_size);
     s.model.max_range = o.number("max_range", s.model.max_range);
     s.margin = o.number("margin", s.margin);
     s.bbox = bbox_of(o);
+    occseg::plugin::sensor_pose_options(o, s);
     s.threads = static_cast<int>(call->threads);
     occseg::plugin::deliver(call, sink, occseg::read_scan_graph(path, s));
   });
@@ -47,7 +50,7 @@ int register_octomap(const occseg_plugin_host* host, occseg_plugin_registrar* r)
       {sizeof(occseg_plugin_reader), ".bt", "OctoMap binary tree; options voxel_size, coarsen, bbox", read_tree, nullptr},
       {sizeof(occseg_plugin_reader), ".ot", "OctoMap full tree (log-odds); options voxel_size, coarsen, bbox", read_tree,
        nullptr},
-      {sizeof(occseg_plugin_reader), ".graph", "OctoMap scan graph, fused; options voxel_size, max_range, margin, bbox",
+      {sizeof(occseg_plugin_reader), ".graph", "OctoMap scan graph, fused; options voxel_size, max_range, margin, bbox, sensor_origin, sensor_orientation",
        read_graph, nullptr},
   };
   for (const auto& x : readers)

@@ -1,7 +1,9 @@
 // Plugin "pcl_reader": PCL .pcd clouds for occseg_map_read, fused into a probabilistic grid by ray
 // casting (liboccseg_pcl), so that C programs read them without linking PCL. Options:
 //   voxel_size (default 0.05 m), max_range (m, default unlimited), margin (m),
-//   bbox=xmin,ymin,zmin,xmax,ymax,zmax, sensor_origin=x,y,z (overrides the file's VIEWPOINT)
+//   bbox=xmin,ymin,zmin,xmax,ymax,zmax, sensor_origin=x,y,z and sensor_orientation=w,x,y,z (each
+//   replaces its half of the file's VIEWPOINT, as the command's --sensor-origin and
+//   --sensor-orientation do)
 #include "occseg/pcd.hpp"
 #include "plugin_options.hpp"
 
@@ -11,7 +13,7 @@ using occseg::plugin::Options;
 
 int read_cloud(const occseg_plugin_call* call, const char* path, const char* const* options, occseg_plugin_map_sink* sink) {
   return occseg::plugin::guarded(call, [&] {
-    const Options o(path, options, {"voxel_size", "max_range", "margin", "bbox", "sensor_origin"});
+    const Options o(path, options, {"voxel_size", "max_range", "margin", "bbox", "sensor_origin", "sensor_orientation"});
     occseg::ScanOptions s;
     s.voxel_size = o.number("voxel_size", s.voxel_size);
     s.model.max_range = o.number("max_range", s.model.max_range);
@@ -20,10 +22,7 @@ int read_cloud(const occseg_plugin_call* call, const char* path, const char* con
       const std::vector<double> b = o.numbers("bbox", 6);
       s.bbox = occseg::Box{{b[0], b[1], b[2]}, {b[3], b[4], b[5]}};
     }
-    if (o.has("sensor_origin")) {
-      const std::vector<double> v = o.numbers("sensor_origin", 3);
-      s.sensor_pose = occseg::make_pose({v[0], v[1], v[2]});
-    }
+    occseg::plugin::sensor_pose_options(o, s);
     s.threads = static_cast<int>(call->threads);
     occseg::plugin::deliver(call, sink, occseg::read_pcd(path, s));
   });
@@ -32,7 +31,8 @@ int read_cloud(const occseg_plugin_call* call, const char* path, const char* con
 int register_pcl(const occseg_plugin_host* host, occseg_plugin_registrar* r) {
   const occseg_plugin_reader reader = {
       sizeof(occseg_plugin_reader), ".pcd",
-      "PCL point cloud, ray-cast from its viewpoint; options voxel_size, max_range, margin, bbox, sensor_origin",
+      "PCL point cloud, ray-cast from its viewpoint; options voxel_size, max_range, margin, bbox, sensor_origin, "
+      "sensor_orientation",
       read_cloud, nullptr};
   return host->register_reader(r, &reader);
 }

@@ -71,6 +71,8 @@ TEST(Npy, BadFilesAreFormatErrors) {
   magic[1] = 'X';
   EXPECT_EQ(status_of(magic), Status::format);
   EXPECT_EQ(status_of(hand_npy("{'descr': '>f4', 'fortran_order': False, 'shape': (2, 2), }", {})), Status::format);
+  EXPECT_EQ(status_of(hand_npy("{'descr': '>c8', 'fortran_order': False, 'shape': (1,), }", std::vector<unsigned char>(8, 0))),
+            Status::format);
   EXPECT_EQ(status_of(hand_npy("{'descr': '<f4', 'fortran_order': False, 'shape': (1000000, 1000000), }", {})),
             Status::format);
   EXPECT_EQ(status_of({0x93, 'N'}), Status::format);
@@ -84,4 +86,22 @@ TEST(Npy, MissingFileIsIoError) {
     EXPECT_EQ(e.status(), Status::io);
     EXPECT_NE(std::string(e.what()).find("/nonexistent/map.npy"), std::string::npos);
   }
+}
+
+TEST(Npy, BigEndianElementsAreSwapped) {
+  // NumPy writes an array of big-endian dtype as it is ('>f4' and its bytes, most significant
+  // first) and np.load reads it back: so does occseg. 0.5f is 3f 00 00 00, 0.25 is 3f d0 00 .. 00.
+  auto parse = [](const std::string& dict, const std::vector<unsigned char>& body) {
+    const std::vector<unsigned char> b = hand_npy(dict, body);
+    return parse_npy(b.data(), b.size(), "be.npy");
+  };
+  const NpyArray f = parse("{'descr': '>f4', 'fortran_order': False, 'shape': (1, 2), }",
+                           {0x3f, 0x00, 0x00, 0x00, 0x3f, 0x80, 0x00, 0x00});
+  EXPECT_TRUE(f.big_endian);
+  EXPECT_EQ(f.descr, "<f4");
+  EXPECT_EQ(grid_from_npy(f, 1.0, "be.npy").p, (std::vector<float>{0.5f, 1.0f}));
+  const NpyArray d = parse("{'descr': '>f8', 'fortran_order': False, 'shape': (1, 1), }", {0x3f, 0xd0, 0, 0, 0, 0, 0, 0});
+  EXPECT_EQ(grid_from_npy(d, 1.0, "be.npy").p, (std::vector<float>{0.25f}));
+  const NpyArray u = parse("{'descr': '>u2', 'fortran_order': False, 'shape': (1, 2), }", {0xff, 0xff, 0x00, 0x01});
+  EXPECT_EQ(grid_from_npy(u, 1.0, "be.npy").p, (std::vector<float>{1.0f, static_cast<float>(1 / 65535.0)}));
 }

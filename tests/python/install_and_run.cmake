@@ -2,7 +2,7 @@
 # with a clean environment (no OCCSEG_LIBRARY, no source tree on PYTHONPATH), then again after
 # moving the prefix elsewhere (the package must find the library relative to itself) and with
 # OCCSEG_LIBRARY pointing at another copy (the install location comes first).
-# -DBUILD=... -DWORK=... -DLIBDIR=... -DPYTHON=... -DSCRIPT=... -DOTHER_LIBRARY=...
+# -DBUILD=... -DWORK=... -DLIBDIR=... -DPYTHON=... -DSCRIPT=... -DOTHER_LIBRARY=... [-DDATA=shared data]
 file(REMOVE_RECURSE ${WORK})
 execute_process(COMMAND ${CMAKE_COMMAND} --install ${BUILD} --prefix ${WORK}/prefix RESULT_VARIABLE rc OUTPUT_QUIET)
 if(NOT rc EQUAL 0)
@@ -20,6 +20,7 @@ endif()
 
 function(smoke prefix)
   execute_process(COMMAND ${CMAKE_COMMAND} -E env --unset=OCCSEG_LIBRARY --unset=LD_LIBRARY_PATH
+      --unset=OCCSEG_PLUGIN_PATH --unset=OCCSEG_NO_DEFAULT_PLUGINS OCCSEG_SHARED_DATA=${DATA}
       PYTHONPATH=${prefix}/lib/python3/dist-packages PYTHONDONTWRITEBYTECODE=1 ${ARGN}
       ${PYTHON} ${SCRIPT} ${prefix} ${prefix}/${LIBDIR}
     WORKING_DIRECTORY ${WORK} RESULT_VARIABLE rc)

@@ -1,5 +1,7 @@
 """Run against an installed prefix without the source tree (and without OCCSEG_LIBRARY, or with it
 pointing elsewhere): proves the package loads the library it was installed with.
+With OCCSEG_SHARED_DATA set, an OctoMap tree is read with no load call and no plugin path: the
+installed plugins are found next to the installed library on first use.
 Usage: installed_smoke.py PREFIX LIBDIR"""
 import os
 import sys
@@ -18,4 +20,11 @@ m[5:10, 6:12, 7:14] = 0.9
 with occseg.segment(m) as r:
     occ = [s for s in r.segments if s.state == occseg.State.OCCUPIED]
     assert len(occ) == 1 and occ[0].voxels == 5 * 6 * 7 and occ[0].bbox == ((7, 6, 5), (13, 11, 9)), occ
+data = os.environ.get("OCCSEG_SHARED_DATA")
+if data and hasattr(occseg, "load_plugin"):
+    assert "OCCSEG_PLUGIN_PATH" not in os.environ and "OCCSEG_NO_DEFAULT_PLUGINS" not in os.environ
+    with occseg.read_map(os.path.join(data, "geb079.bt")) as t:
+        assert t.dims == (487, 187, 39), t.dims
+    reader = [p for p in occseg.plugins() if p.name == "octomap_reader"]
+    assert len(reader) == 1 and reader[0].path.startswith(os.path.join(libdir, "occseg", "plugins")), reader
 print(f"installed occseg {occseg.version()} from {where} loaded {occseg.library_path()}")

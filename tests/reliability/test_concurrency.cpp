@@ -257,6 +257,72 @@ TEST(Concurrency, PluginsLoadWhileOtherThreadsSegmentAndEnumerate) {
 }
 #endif
 
+#ifdef OCCSEG_BROKEN_PLUGINS
+TEST(Concurrency, FirstReadsRacingToLoadTheSearchPathAllFindItsReader) {
+  // The same race in every build (the ThreadSanitizer one has no OctoMap): the search path is the
+  // folder of broken plugins, where only "misbehaving" loads; its reader of .nomap returns no
+  // map. Eight threads' first reads of a .nomap start at once: each must reach that reader (the
+  // load finished before any of them looked again), and the plugin is registered once.
+  const int rc = in_child([&] {
+    ::setenv("OCCSEG_PLUGIN_PATH", OCCSEG_BROKEN_PLUGINS, 1);
+    ::unsetenv("OCCSEG_NO_DEFAULT_PLUGINS");
+    std::atomic<int> ready{0}, wrong{0};
+    std::vector<std::thread> pool;
+    for (int i = 0; i < kThreads; ++i)
+      pool.emplace_back([&] {
+        ready.fetch_add(1);
+        while (ready.load() < kThreads) {
+        }
+        occseg_map* m = nullptr;
+        const int status = occseg_map_read(&m, "whatever.nomap");
+        if (status != OCCSEG_EPLUGIN || !std::strstr(occseg_last_error(), "the reader returned no map") || m)
+          wrong.fetch_add(1);
+        occseg_map_free(m);
+      });
+    for (auto& t : pool) t.join();
+    int copies = 0;
+    for (std::uint32_t k = 0; k < occseg_plugin_count(); ++k)
+      copies += std::strcmp(occseg_plugin_name(k), "misbehaving") == 0;
+    return wrong.load() ? 1 : copies != 1 ? 2 : 0;
+  });
+  EXPECT_EQ(rc, 0) << "1: a read did not reach the plugin's reader, 2: the plugin is not registered exactly once";
+}
+#endif
+
+#ifdef OCCSEG_READER_PLUGIN
+TEST(Concurrency, FirstReadsOfAPluginFormatLoadTheSearchPathOnce) {
+  // No load call: the first reads of .bt load the default search path (here the folder of the
+  // OctoMap reader plugin, on OCCSEG_PLUGIN_PATH). Eight threads of a fresh child process start
+  // their first read at once: every read succeeds and the plugin is registered once. Run alone
+  // (as ctest runs each test), the child starts with no reader plugin loaded.
+  const std::string plugin = OCCSEG_READER_PLUGIN;
+  const std::string dir = plugin.substr(0, plugin.find_last_of('/'));
+  const std::string bt = std::string(OCCSEG_SHARED_DATA) + "/geb079.bt";
+  const int rc = in_child([&] {
+    ::setenv("OCCSEG_PLUGIN_PATH", dir.c_str(), 1);
+    ::unsetenv("OCCSEG_NO_DEFAULT_PLUGINS");
+    std::atomic<int> ready{0}, failed{0};
+    std::vector<std::thread> pool;
+    for (int i = 0; i < kThreads; ++i)
+      pool.emplace_back([&] {
+        const char* opts[] = {"bbox=-1,-1,0,1,1,1", nullptr};
+        ready.fetch_add(1);
+        while (ready.load() < kThreads) {
+        }
+        occseg_map* m = nullptr;
+        if (occseg_map_read_options(&m, bt.c_str(), opts) != OCCSEG_OK || !m) failed.fetch_add(1);
+        occseg_map_free(m);
+      });
+    for (auto& t : pool) t.join();
+    int copies = 0;
+    for (std::uint32_t k = 0; k < occseg_plugin_count(); ++k)
+      copies += std::strcmp(occseg_plugin_name(k), "octomap_reader") == 0;
+    return failed.load() ? 1 : copies != 1 ? 2 : 0;
+  });
+  EXPECT_EQ(rc, 0) << "1: a read failed, 2: the reader plugin is not registered exactly once";
+}
+#endif
+
 TEST(Concurrency, TheFirstSegmentationsOfAProcessMayStartTogether) {
   // Lazily set-up state must survive first calls made at once. Each round is a fresh child
   // process (forked before this process segments anything) whose eight threads are released

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <vector>
 
 #include "occseg/error.hpp"
 #include "occseg/geometry.hpp"
@@ -37,8 +38,37 @@ std::string extension(const std::string& path) {
   return e;
 }
 
-void reject(bool given, const char* option, const std::string& ext) {
-  if (given) throw Error(Status::invalid_argument, std::string(option) + " does not apply to " + ext + " input");
+// The input options and the formats each applies to (the help's lists; docs/cli.md): an option
+// given for another format is a usage error naming it and its formats, whatever its value, never
+// an option accepted and ignored. A plugin's format takes --voxel-size (its reader's option
+// voxel_size) and nothing else.
+void check_options_apply(const MapInputOptions& o, const std::string& ext, bool plugin) {
+  struct Rule {
+    const char* option;
+    bool given;
+    std::vector<std::string> formats;
+    bool plugins;
+  };
+  const Rule rules[] = {
+      {"--voxel-size", o.voxel_size.has_value(), {".npy", ".nrrd", ".pcd", ".graph", ".bt", ".ot"}, true},
+      {"--bbox", o.bbox.has_value(), {".pcd", ".graph", ".bt", ".ot"}, false},
+      {"--sensor-origin", o.sensor_origin.has_value(), {".pcd", ".graph"}, false},
+      {"--sensor-orientation", o.sensor_orientation.has_value(), {".pcd", ".graph"}, false},
+      {"--max-range", o.max_range >= 0, {".pcd", ".graph"}, false},
+      {"--coarsen", !o.coarsen.empty(), {".bt", ".ot"}, false},
+  };
+  for (const Rule& r : rules) {
+    if (!r.given || (plugin ? r.plugins : std::find(r.formats.begin(), r.formats.end(), ext) != r.formats.end()))
+      continue;
+    std::string list;
+    for (std::size_t k = 0; k < r.formats.size(); ++k)
+      list += (k == 0 ? "" : k + 1 == r.formats.size() && !r.plugins ? " and " : ", ") + r.formats[k];
+    if (r.plugins) list += " and plugin formats";
+    std::string why = plugin ? " (a plugin's format)" : "";
+    if (ext == ".yaml" && std::string(r.option) == "--voxel-size") why = " (the YAML's resolution is the cell size)";
+    throw Error(Status::invalid_argument, std::string(r.option) + " does not apply to " + ext + " input" + why +
+                                              ": it applies to " + list + " only");
+  }
 }
 
 // OctoMap tells stderr what it reads ("Reading octree type OcTree", "Done (23 nodes)"); the tool
@@ -94,9 +124,9 @@ ScanOptions scan_options(const MapInputOptions& o) {
   s.bbox = box_of(o);
   s.threads = o.threads;
   s.progress = o.progress;
-  if (o.sensor_origin || o.sensor_orientation)
-    s.sensor_pose = make_pose(o.sensor_origin.value_or(std::array<double, 3>{0, 0, 0}),
-                              o.sensor_orientation.value_or(std::array<double, 4>{1, 0, 0, 0}));
+  // Each half of the pose replaces its half of the stored one (the help's "default: stored pose").
+  s.sensor_origin = o.sensor_origin;
+  s.sensor_orientation = o.sensor_orientation;
   return s;
 }
 #endif
@@ -123,16 +153,16 @@ bool have_pcl() {
 MapInput load_map(const std::string& path, const MapInputOptions& o) {
   const std::string ext = extension(path);
   MapInput in;
-  const bool scan_opts = o.sensor_origin || o.sensor_orientation || o.max_range >= 0;
   const bool coarsen = !o.coarsen.empty();
+  const bool builtin = ext == ".npy" || ext == ".nrrd" || ext == ".yaml" || ext == ".pcd" || ext == ".graph" ||
+                       ext == ".bt" || ext == ".ot";
+  if (builtin || find_reader(ext)) check_options_apply(o, ext, !builtin);
   if (ext == ".npy" || ext == ".nrrd") {
-    reject(o.bbox.has_value(), "--bbox", ext);
-    reject(scan_opts, "--sensor-origin/--sensor-orientation/--max-range", ext);
-    reject(coarsen, "--coarsen", ext);
     in.kind = InputKind::volume;
     if (ext == ".npy") {
       const NpyArray a = read_npy(path);
-      in.format = "NumPy .npy, " + npy_type(a.descr) + (a.fortran_order ? ", Fortran order" : ", C order");
+      in.format = "NumPy .npy, " + npy_type(a.descr) + (a.big_endian ? " big-endian" : "") +
+                  (a.fortran_order ? ", Fortran order" : ", C order");
       in.grid = grid_from_npy(a, o.voxel_size.value_or(1.0), path);
     } else {
       const NrrdVolume v = read_nrrd(path);
@@ -149,9 +179,6 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
     return in;
   }
   if (ext == ".yaml") {  // a map_server / Nav2 map: its resolution and origin are in the file
-    reject(o.voxel_size.has_value(), "--voxel-size (the YAML's resolution is the cell size)", ext);
-    reject(o.bbox.has_value(), "--bbox", ext);
-    reject(scan_opts, "--sensor-origin/--sensor-orientation/--max-range", ext);
     in.kind = InputKind::map2d;
     in.grid = read_map_yaml(path);
     in.format = "map_server map (.yaml + PGM image, " + std::to_string(in.grid.dims.nx) + " x " +
@@ -159,7 +186,6 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
     return in;
   }
   if (ext == ".pcd" || ext == ".graph") {
-    reject(coarsen, "--coarsen", ext);
     in.kind = InputKind::cloud;
     if (ext == ".pcd") {
 #ifdef OCCSEG_HAVE_PCL
@@ -190,7 +216,6 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
     return in;
   }
   if (ext == ".bt" || ext == ".ot") {
-    reject(scan_opts, "--sensor-origin/--sensor-orientation/--max-range", ext);
     in.kind = InputKind::tree;
 #ifdef OCCSEG_HAVE_OCTOMAP
     OctreeOptions t;
@@ -210,9 +235,6 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
     return in;
   }
   if (find_reader(ext)) {  // a reader a plugin registered (occseg plugins lists them)
-    reject(o.bbox.has_value(), "--bbox", ext);
-    reject(scan_opts, "--sensor-origin/--sensor-orientation/--max-range", ext);
-    reject(coarsen, "--coarsen", ext);
     std::vector<std::string> options;
     if (o.voxel_size) {
       char t[64];

@@ -108,11 +108,13 @@ void add_input_options(CLI::App* c, InputArgs& a) {
   c->add_option("--bbox", a.bbox, "grid box XMIN YMIN ZMIN XMAX YMAX ZMAX in metres (.pcd .graph .bt .ot; default: fitted)")
       ->expected(6)
       ->check(finite_number());
-  c->add_option("--sensor-origin", a.sensor_origin, "X Y Z: sensor position for .pcd/.graph (default: stored pose)")
+  c->add_option("--sensor-origin", a.sensor_origin,
+                "X Y Z: sensor position for .pcd/.graph (default: the stored one; the stored orientation is kept)")
       ->expected(3)
       ->check(finite_number());
   c->add_option("--sensor-orientation", a.sensor_orientation,
-                "W X Y Z: sensor rotation quaternion for .pcd/.graph (normalised; not all zero)")
+                "W X Y Z: sensor rotation quaternion for .pcd/.graph (normalised; not all zero; default: the "
+                "stored one; the stored position is kept)")
       ->expected(4)
       ->check(finite_number());
   c->add_option("--max-range", a.max_range, "metres; longer returns mark free space only (.pcd/.graph)")

@@ -16,13 +16,15 @@ struct NpyArray {
   std::string descr;                // numpy dtype string as stored, e.g. "<f4", "|u1", "<u4"
   std::vector<std::size_t> shape;   // as stored, slowest axis first (C order)
   bool fortran_order = false;
-  std::vector<unsigned char> data;  // raw little-endian element bytes, in file order
+  std::vector<unsigned char> data;  // little-endian element bytes, in file order
+  bool big_endian = false;          // the file's were big-endian ('>f4'): swapped, descr made '<f4'
   std::size_t element_count() const;
 };
 
 // Parses an .npy file. Throws Error(io) if it cannot be read and Error(format) naming the problem
-// for a wrong magic, a malformed header, an unsupported dtype (only little-endian f4, f8, u1, u2,
-// u4 and i4 are read), an element count beyond 2^40 or a file shorter than its header claims.
+// for a wrong magic, a malformed header, an unsupported dtype (only f4, f8, u1, u2, u4 and i4 are
+// read, in either byte order: big-endian data is swapped to little-endian, see NpyArray), an
+// element count beyond 2^40 or a file shorter than its header claims.
 NpyArray read_npy(const std::string& path);
 NpyArray parse_npy(const unsigned char* bytes, std::size_t size, const std::string& name);
 

@@ -110,7 +110,7 @@ void add_cloud_bounds(ScanBounds& bounds, const pcl::PointCloud<PointT>& cloud, 
 }
 
 // Fuses clouds into a new grid with the options' model, voxel size and box (given or fitted to
-// all clouds and sensor origins). Each cloud uses its own pose unless options.sensor_pose is set.
+// all clouds and sensor origins). Each cloud uses its own pose, overridden as options.pose_for says.
 // Fused through ScanFusion: precise wherever the grid lies. Throws Error(invalid_argument) for
 // bad options, Error(bad_value) if no point is finite or the box or a sensor is out of range.
 template <typename PointT>
@@ -119,7 +119,7 @@ Grid integrate_clouds(const std::vector<const pcl::PointCloud<PointT>*>& clouds,
   for (const auto* c : clouds)
     if (!c) throw Error(Status::invalid_argument, "null cloud pointer");
   auto pose_of = [&](const pcl::PointCloud<PointT>& c) {
-    return options.sensor_pose ? *options.sensor_pose : cloud_pose_d(c);
+    return options.pose_for(cloud_pose_d(c));
   };
   GridFrame frame;
   if (options.bbox) {

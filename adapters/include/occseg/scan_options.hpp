@@ -37,6 +37,13 @@ struct ScanOptions {
   // a scan graph node's pose); applied to every scan. Double, so that a sensor far from the
   // world origin keeps its position to the millimetre and better (make_pose).
   std::optional<Eigen::Isometry3d> sensor_pose;
+  // Override one half of the stored pose each, keeping the other (what --sensor-origin and
+  // --sensor-orientation do): the sensor's position, and its rotation as a quaternion (w, x, y, z),
+  // normalised as make_pose normalises it. Applied to every scan; ignored when sensor_pose is set.
+  std::optional<Vec3> sensor_origin;
+  std::optional<std::array<double, 4>> sensor_orientation;
+  // The pose a scan stored with pose `stored` is fused from under these options.
+  Eigen::Isometry3d pose_for(const Eigen::Isometry3d& stored) const;
   int threads = 0;              // 0: all cores; results never depend on it
   // Called while fusing with the share of all points ray-cast so far, in [0, 1], from the
   // calling thread; returning false cancels: the reader throws Error(cancelled).

@@ -407,7 +407,8 @@ OCCSEG_API int occseg_result_write(const occseg_result *result, const char *dir)
  * its register function fails; the registry is then unchanged. */
 OCCSEG_API int occseg_plugins_load(const char *path);
 
-/* Loads every *.so file of the plugin search path: the folders of the environment variable
+/* Loads every *.so file of the plugin search path (also done once, by itself, at the first read
+ * or write of an extension nothing serves: see occseg_map_read_options): the folders of the environment variable
  * OCCSEG_PLUGIN_PATH (colon-separated), then the install's <libdir>/occseg/plugins (found
  * next to the loaded liboccseg, so relocated installs work, then at the configured prefix).
  * A plugin whose name is already loaded is skipped (the first in the path wins). All files are
@@ -454,8 +455,12 @@ OCCSEG_API int occseg_param_default(uint32_t index, char *buf, size_t size, size
 
 /* occseg_map_read / occseg_map_write pick the reader or writer registered for the path's last
  * extension (case-insensitive): built in are .npy and .nrrd (and the reader .yaml), plugins add
- * others (.pcd, .bt, ...).
- * An extension nobody handles fails with OCCSEG_EUNSUPPORTED naming it. These variants pass
+ * others (.pcd, .bt, ...). The first read (write) of an extension no loaded reader (writer)
+ * serves loads the plugin search path as occseg_plugins_load_default() does, once per process and
+ * thread-safely, and looks again, so the installed plugins' formats need no load call; the
+ * environment variable OCCSEG_NO_DEFAULT_PLUGINS=1 turns that off.
+ * An extension nobody handles then fails with OCCSEG_EUNSUPPORTED naming it, the folders searched
+ * and the call that would help (occseg_plugins_load, OCCSEG_PLUGIN_PATH). These variants pass
  * reader/writer options: NULL or a NULL-terminated array of "key=value" texts (see the reader's
  * documentation; unknown keys fail). */
 OCCSEG_API int occseg_map_read_options(occseg_map **out, const char *path, const char *const *options);

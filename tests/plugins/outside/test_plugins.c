@@ -7,6 +7,10 @@
  *   test_plugins default_broken               the same over a folder of broken plugins
  *   test_plugins octomap FILE.bt              the installed OctoMap reader plugin, found by itself
  *   test_plugins pcd FILE.pcd                 the installed PCL reader plugin
+ *   test_plugins auto FILE.bt WORKDIR         no load call: the first read of .bt loads the search path
+ *   test_plugins auto_off FILE.bt             the same with OCCSEG_NO_DEFAULT_PLUGINS=1: nothing loads
+ * The example scenario counts plugins around an explicit load and pins the errors of extensions
+ * nothing serves before it, so it runs with OCCSEG_NO_DEFAULT_PLUGINS=1 (tests/plugins/CMakeLists.txt).
  */
 #define _POSIX_C_SOURCE 200809L /* symlink, lstat */
 #include <occseg/occseg.h>
@@ -350,11 +354,23 @@ static void octomap(const char *bt) {
     occseg_map *c = NULL;
     EXPECT_FAIL(occseg_map_read(&c, "no/such/file.bt"), OCCSEG_EIO, "no/such/file.bt", NULL, NULL);
   }
+  /* The scan graph beside it takes the pose options of the command's .graph input too. */
+  {
+    char graph[4096];
+    const char *slash = strrchr(bt, '/');
+    const char *opts[] = {"sensor_origin=0,0,0", "sensor_orientation=1,0,0,0", NULL};
+    occseg_map *g = NULL;
+    snprintf(graph, sizeof graph, "%.*s/spherical_scan.graph", slash ? (int)(slash - bt) : 1, slash ? bt : ".");
+    CHECK(occseg_map_read_options(&g, graph, opts) == OCCSEG_OK);
+    occseg_map_free(g);
+  }
   /* And it segments. */
   CHECK(m && occseg_segment(&r, m, NULL) == OCCSEG_OK && occseg_result_segment_count(r) > 1);
   occseg_result_free(r);
   occseg_map_free(m);
 }
+
+static void pose_options(const char *file);
 
 static void pcd(const char *file) {
   const char *opts[] = {"voxel_size=0.1", NULL}, *bad[] = {"voxel_size=-1", NULL};
@@ -375,6 +391,102 @@ static void pcd(const char *file) {
   occseg_map_free(m);
   m = NULL;
   EXPECT_FAIL(occseg_map_read_options(&m, file, bad), OCCSEG_EINVAL, "voxel size -1", "plugin 'pcl_reader'", NULL);
+  pose_options(file);
+}
+
+/* Reads `file` with `opt` (and voxel_size=0.1); its values (malloc'd) and dims, or NULL. */
+static float *read_values(const char *file, const char *opt, size_t dims[3]) {
+  const char *opts[] = {"voxel_size=0.1", opt, NULL};
+  occseg_map *m = NULL;
+  float *v = NULL;
+  if (occseg_map_read_options(&m, file, opts) == OCCSEG_OK && occseg_map_dims(m, dims) == OCCSEG_OK) {
+    v = (float *)malloc(dims[0] * dims[1] * dims[2] * sizeof *v);
+    if (v && occseg_map_values(m, v, dims[0] * dims[1] * dims[2]) != OCCSEG_OK) {
+      free(v);
+      v = NULL;
+    }
+  }
+  occseg_map_free(m);
+  return v;
+}
+
+static int same_values(const float *a, const size_t da[3], const float *b, const size_t db[3]) {
+  return a && b && da[0] == db[0] && da[1] == db[1] && da[2] == db[2] &&
+         memcmp(a, b, da[0] * da[1] * da[2] * sizeof *a) == 0;
+}
+
+/* sensor_origin and sensor_orientation each replace their half of the stored pose, as the
+ * command's --sensor-origin and --sensor-orientation do (issue 26): the table scene is seen from
+ * the origin turned 180 degrees about x (VIEWPOINT 0 0 0 0 1 0 0), so the origin alone, or that
+ * turn alone, gives the stored map, and no turn another one. */
+static void pose_options(const char *file) {
+  size_t d0[3], d1[3], d2[3], d3[3];
+  float *stored = read_values(file, NULL, d0), *origin = read_values(file, "sensor_origin=0,0,0", d1);
+  float *turn = read_values(file, "sensor_orientation=0,1,0,0", d2), *none = read_values(file, "sensor_orientation=1,0,0,0", d3);
+  occseg_map *m = NULL;
+  const char *zero[] = {"sensor_orientation=0,0,0,0", NULL}, *three[] = {"sensor_orientation=1,0,0", NULL};
+  CHECK(stored != NULL && origin != NULL && turn != NULL && none != NULL);
+  CHECK(same_values(stored, d0, origin, d1));
+  CHECK(same_values(stored, d0, turn, d2));
+  CHECK(none && !same_values(stored, d0, none, d3));
+  EXPECT_FAIL(occseg_map_read_options(&m, file, zero), OCCSEG_EINVAL, "sensor_orientation", "no rotation", NULL);
+  EXPECT_FAIL(occseg_map_read_options(&m, file, three), OCCSEG_EINVAL, "sensor_orientation", "needs 4", NULL);
+  CHECK(m == NULL);
+  free(stored);
+  free(origin);
+  free(turn);
+  free(none);
+}
+
+/* A program that never calls a load function reads .bt as the occseg command does: the first read
+ * of an extension no loaded reader serves loads the default search path (the install's plugin
+ * folder, next to the installed liboccseg), once. An extension nothing serves names itself, the
+ * folders searched and what would help. */
+static void auto_load(const char *bt, const char *work) {
+  const uint32_t before = occseg_plugin_count();
+  occseg_map *m = NULL, *none = NULL;
+  size_t dims[3];
+  char path[4096], search[8192];
+  uint32_t after;
+  CHECK(getenv("OCCSEG_NO_DEFAULT_PLUGINS") == NULL);
+  CHECK(find_plugin("octomap_reader") < 0 && !find_stage(OCCSEG_STAGE_READER, ".bt", "octomap_reader"));
+  CHECK(occseg_map_read(&m, bt) == OCCSEG_OK);
+  CHECK(m && occseg_map_dims(m, dims) == OCCSEG_OK && dims[0] == 487 && dims[1] == 187 && dims[2] == 39);
+  CHECK(find_plugin("octomap_reader") >= 0 && find_plugin("pcl_reader") >= 0);
+  after = occseg_plugin_count();
+  CHECK(after >= before + 2);
+  occseg_map_free(m);
+  /* Loaded once: later reads and misses load nothing more. */
+  CHECK(occseg_map_read(&m, bt) == OCCSEG_OK);
+  occseg_map_free(m);
+  CHECK(occseg_plugin_search_path(search, sizeof search, NULL) == OCCSEG_OK);
+  snprintf(path, sizeof path, "%s/map.nosuchformat", work);
+  EXPECT_FAIL(occseg_map_read(&none, path), OCCSEG_EUNSUPPORTED, "no reader for extension '.nosuchformat'",
+              "occseg_plugins_load(", "OCCSEG_PLUGIN_PATH");
+  CHECK(strstr(occseg_last_error(), search) != NULL); /* the folders that were searched */
+  CHECK(none == NULL);
+  {
+    occseg_map *c = cube_map(0);
+    snprintf(path, sizeof path, "%s/map.occtxt", work);
+    EXPECT_FAIL(occseg_map_write(c, path), OCCSEG_EUNSUPPORTED, "no writer for extension '.occtxt'",
+                "no plugin of the default search path", "occseg_plugins_load(");
+    occseg_map_free(c);
+  }
+  CHECK(occseg_plugin_count() == after);
+}
+
+/* With OCCSEG_NO_DEFAULT_PLUGINS=1 nothing is loaded behind the caller's back: the error says why
+ * and which call loads the plugins, and that call then works. */
+static void auto_off(const char *bt) {
+  const uint32_t before = occseg_plugin_count();
+  occseg_map *m = NULL;
+  CHECK(getenv("OCCSEG_NO_DEFAULT_PLUGINS") != NULL);
+  EXPECT_FAIL(occseg_map_read(&m, bt), OCCSEG_EUNSUPPORTED, "no reader for extension '.bt'",
+              "OCCSEG_NO_DEFAULT_PLUGINS is set", "occseg_plugins_load_default()");
+  CHECK(m == NULL && occseg_plugin_count() == before && find_plugin("octomap_reader") < 0);
+  CHECK(occseg_plugins_load_default(NULL) == OCCSEG_OK);
+  CHECK(occseg_map_read(&m, bt) == OCCSEG_OK);
+  occseg_map_free(m);
 }
 
 int main(int argc, char **argv) {
@@ -384,6 +496,8 @@ int main(int argc, char **argv) {
   else if (argc == 2 && strcmp(argv[1], "default_broken") == 0) default_broken();
   else if (argc == 3 && strcmp(argv[1], "octomap") == 0) octomap(argv[2]);
   else if (argc == 3 && strcmp(argv[1], "pcd") == 0) pcd(argv[2]);
+  else if (argc == 4 && strcmp(argv[1], "auto") == 0) auto_load(argv[2], argv[3]);
+  else if (argc == 3 && strcmp(argv[1], "auto_off") == 0) auto_off(argv[2]);
   else {
     fprintf(stderr, "usage: test_plugins example SO WORKDIR | errors DIR | default | octomap FILE.bt\n");
     return 2;
