@@ -51,4 +51,9 @@ nlohmann::json summary_json(const RunReport& run);
 void write_segmentation_png(const std::string& path, const std::string& title, const Grid& grid, const Result& r,
                             const std::vector<std::uint8_t>* truth_states = nullptr, StagedFiles* into = nullptr);
 
+// scene.png: the occupied segments as shaded voxels seen obliquely from above, one colour per
+// segment, with a scale bar and a legend of the largest segments (render_scene.hpp).
+void write_scene_png(const std::string& path, const std::string& title, const Grid& grid, const Result& r,
+                     StagedFiles* into = nullptr);
+
 }  // namespace occseg::cli
