@@ -93,7 +93,7 @@ constexpr int kLine = 10;          // a line of text: 7 pixel glyphs and 3 pixel
 constexpr int kLegendLine = 14;    // a line of the legend: 10 pixel swatches and 4 below
 constexpr int kMinWidth = 160;
 constexpr int kShadeLevels = 6;    // heights of the top view
-constexpr Rgb kEmptyColumn{205, 205, 205};
+constexpr Rgb kEmptyColumn{225, 225, 225};
 constexpr Rgb kLabelBack{255, 255, 255};
 constexpr std::uint64_t kNoKey = ~std::uint64_t(0);
 constexpr std::uint32_t kNoSegment = ~std::uint32_t(0);

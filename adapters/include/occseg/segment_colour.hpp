@@ -5,7 +5,8 @@
 // A segment's colour depends on its id alone (not on the other segments), so the colour of a
 // segment never changes when an output is written on its own. Sixteen hues, none of them the light
 // blue of free space, the near white of unknown space or a grey of the probability ramp; ids are
-// scattered over them by a multiplicative hash, so consecutive ids rarely share a hue.
+// scattered over them by a multiplicative hash. Consecutive ids never share a hue: one more id
+// moves the index by 7 or 8 (mod 16).
 #pragma once
 #include <cstddef>
 #include <cstdint>
