@@ -124,24 +124,63 @@ double nice_length(double max_m) {
   return p;
 }
 
+// Per row (y, z) of the map, the x range [lo, hi] that holds the boxes of occupied segments (none:
+// lo > hi), so the scans skip what no occupied segment reaches. Left empty (full rows) for maps
+// whose rows are too short to gain, or when listing the boxes' rows would cost more than a scan.
+struct RowRanges {
+  std::vector<std::uint32_t> lo, hi;
+  bool empty() const { return lo.empty(); }
+};
+
+RowRanges occupied_rows(const Result& r) {
+  RowRanges R;
+  const Dims& d = r.dims;
+  const std::size_t rows = d.ny * d.nz;
+  if (d.nx < 32) return R;
+  std::uint64_t work = 0;
+  for (const Segment& s : r.segments)
+    if (s.state == State::occupied && s.voxels > 0)
+      work += std::uint64_t(s.bbox_max[1] - s.bbox_min[1] + 1) * (s.bbox_max[2] - s.bbox_min[2] + 1);
+  if (work > 4 * std::uint64_t(rows)) return R;
+  R.lo.assign(rows, std::numeric_limits<std::uint32_t>::max());
+  R.hi.assign(rows, 0);
+  for (const Segment& s : r.segments) {
+    if (s.state != State::occupied || s.voxels == 0) continue;
+    for (std::uint32_t z = s.bbox_min[2]; z <= s.bbox_max[2]; ++z)
+      for (std::uint32_t y = s.bbox_min[1]; y <= s.bbox_max[1]; ++y) {
+        const std::size_t i = y + d.ny * std::size_t(z);
+        R.lo[i] = std::min(R.lo[i], s.bbox_min[0]);
+        R.hi[i] = std::max(R.hi[i], s.bbox_max[0]);
+      }
+  }
+  return R;
+}
+
 // Paints the visible voxels in an order where every voxel comes after all it can hide: z
-// ascending, then y and x descending (the view looks along +x, +y and -z). `at(x, y, z)` is the
-// occupied label of a cell of `d` or kNone.
-template <class At>
-void paint(Image& img, const Dims& d, std::size_t k, const SceneProjection& P, const Axes& A,
-           const std::vector<SpritePixel>& sprite, const At& at) {
+// ascending, then y and x descending (the view looks along +x, +y and -z). `cells` holds a label
+// per cell of `d`, x fastest; `shown(l)` says whether label l is drawn.
+template <class Shown>
+void paint(Image& img, const Dims& d, const std::uint32_t* cells, std::size_t k, const SceneProjection& P,
+           const Axes& A, const std::vector<SpritePixel>& sprite, const RowRanges& ranges, const Shown& shown) {
   std::uint32_t cached = kNone;
   Rgb shades[3];
   const int vx0 = kViewX, vx1 = kViewX + kViewWidth, vy0 = kViewY, vy1 = kViewY + kViewHeight;
-  for (std::size_t z = 0; z < d.nz; ++z)
-    for (std::size_t y = d.ny; y-- > 0;)
-      for (std::size_t x = d.nx; x-- > 0;) {
-        const std::uint32_t l = at(x, y, z);
-        if (l == kNone) continue;
-        // A cell whose three visible neighbours are all occupied is covered by them.
-        if (x > 0 && y > 0 && z + 1 < d.nz && at(x - 1, y, z) != kNone && at(x, y - 1, z) != kNone &&
-            at(x, y, z + 1) != kNone)
-          continue;
+  const std::size_t nx = d.nx, plane = d.nx * d.ny;
+  for (std::size_t z = 0; z < d.nz; ++z) {
+    const bool top_layer = z + 1 == d.nz;
+    for (std::size_t y = d.ny; y-- > 0;) {
+      const std::uint32_t* row = cells + nx * y + plane * z;
+      std::size_t x_lo = 0, x_end = nx;  // x in [x_lo, x_end)
+      if (!ranges.empty()) {
+        const std::size_t i = y + d.ny * z;
+        if (ranges.lo[i] > ranges.hi[i]) continue;
+        x_lo = ranges.lo[i], x_end = std::size_t(ranges.hi[i]) + 1;
+      }
+      for (std::size_t x = x_end; x-- > x_lo;) {
+        const std::uint32_t l = row[x];
+        if (!shown(l)) continue;
+        // A cell whose three visible neighbours are all drawn is covered by them.
+        if (x > 0 && y > 0 && !top_layer && shown(row[x - 1]) && shown(row[x - nx]) && shown(row[x + plane])) continue;
         if (l != cached) {
           const Rgb c = segment_colour(l);
           shades[0] = shade(c, kShadeTop), shades[1] = shade(c, kShadeFront), shades[2] = shade(c, kShadeLeft);
@@ -155,6 +194,8 @@ void paint(Image& img, const Dims& d, std::size_t k, const SceneProjection& P, c
           if (u >= vx0 && u < vx1 && v >= vy0 && v < vy1) img.set(u, v, shades[p.face]);
         }
       }
+    }
+  }
 }
 
 }  // namespace
@@ -231,26 +272,29 @@ Image render_scene(const Result& r, double voxel_size, const SceneOptions& o) {
     const std::vector<SpritePixel> sprite = cube_sprite(A, P.scale, double(k));
     const std::uint32_t* labels = r.labels.data();
     if (k == 1) {
-      auto at = [&](std::size_t x, std::size_t y, std::size_t z) -> std::uint32_t {
-        const std::uint32_t l = labels[x + d.nx * (y + d.ny * z)];
-        return l < occupied.size() && occupied[l] ? l : kNone;
-      };
-      paint(img, d, 1, P, A, sprite, at);
+      const std::uint8_t* occ = occupied.data();
+      const std::size_t n = occupied.size();
+      paint(img, d, labels, 1, P, A, sprite, occupied_rows(r), [occ, n](std::uint32_t l) { return l < n && occ[l]; });
     } else {
       // Cells of k^3 voxels, each holding the label of its topmost occupied voxel.
       const Dims c{(d.nx + k - 1) / k, (d.ny + k - 1) / k, (d.nz + k - 1) / k};
       std::vector<std::uint32_t> cells(c.count(), kNone);
+      const RowRanges ranges = occupied_rows(r);
       for (std::size_t z = 0; z < d.nz; ++z)
         for (std::size_t y = 0; y < d.ny; ++y) {
           const std::uint32_t* row = labels + d.nx * (y + d.ny * z);
           std::uint32_t* crow = cells.data() + c.nx * (y / k + c.ny * (z / k));
-          for (std::size_t x = 0; x < d.nx; ++x) {
+          std::size_t x0 = 0, x1 = d.nx;
+          if (!ranges.empty()) {
+            const std::size_t i = y + d.ny * z;
+            x0 = ranges.lo[i], x1 = ranges.lo[i] > ranges.hi[i] ? x0 : std::size_t(ranges.hi[i]) + 1;
+          }
+          for (std::size_t x = x0; x < x1; ++x) {
             const std::uint32_t l = row[x];
             if (l < occupied.size() && occupied[l]) crow[x / k] = l;
           }
         }
-      auto at = [&](std::size_t x, std::size_t y, std::size_t z) { return cells[x + c.nx * (y + c.ny * z)]; };
-      paint(img, c, k, P, A, sprite, at);
+      paint(img, c, cells.data(), k, P, A, sprite, RowRanges{}, [](std::uint32_t l) { return l != kNone; });
     }
   }
 
