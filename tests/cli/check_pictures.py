@@ -97,6 +97,12 @@ big[:, :, :] = np.where(np.random.default_rng(3).random((200, 128, 128)) < 0.5, 
 doc, px = segment("noise", big, "--param", "occupied_connectivity=6")
 assert colours(px) & all_shades
 
+# --- scene.png cannot be written (a directory in its place): exit 2 naming it, nothing of the set ---
+os.makedirs(os.path.join(work, "blocked", "scene.png"))
+r = run("segment", "boxes.npy", "--out", "blocked")
+assert r.returncode == 2 and "scene.png" in r.stderr and r.stderr.count("\n") == 1, (r.returncode, r.stderr)
+assert os.listdir(os.path.join(work, "blocked")) == ["scene.png"], os.listdir(os.path.join(work, "blocked"))
+
 # --- segmentation.png on a narrow map: the table scene at 2 cm (59 x 35 x 131 voxels) ---
 if not os.path.exists(os.path.join(data, "table_scene_mug_stereo_textured.pcd")):
     print("cli pictures: no shared data, table scene skipped")
