@@ -53,7 +53,7 @@ struct FigureOptions {
   std::string title;   // drawn above everything ("" for none)
   int scale = 1;       // pixels per voxel
   int shrink = 1;      // voxels per pixel along each axis (every shrink-th voxel is drawn), for large maps
-  bool legend = true;  // state colours, boundary, probability ramp
+  bool legend = true;  // the colours the rows use (layout_figure: LegendKind), the probability ramp
 };
 
 struct Image {

@@ -54,9 +54,10 @@ struct SpritePixel {
   std::uint8_t face;  // 0 top, 1 front, 2 left
 };
 
-// The pixels of a cube of edge `e` voxels: each pixel whose centre lies within half a pixel of one
-// of the three visible faces, given to the face it lies deepest in (so neighbouring cubes, drawn
-// at rounded positions, leave no cracks between them).
+// The pixels of a cube of edge `e` voxels: for each of the three visible faces, each pixel whose
+// centre lies within half a pixel of it (so neighbouring cubes, drawn at rounded positions, leave
+// no cracks between them). A pixel near several faces has an entry for each, the face it lies
+// deepest in last.
 std::vector<SpritePixel> cube_sprite(const Axes& A, double s, double e) {
   const double k = s * e;
   const double ex[2] = {k * A.rx, -k * A.ux}, ey[2] = {k * A.ry, -k * A.uy}, ez[2] = {k * A.rz, -k * A.uz};
@@ -76,8 +77,8 @@ std::vector<SpritePixel> cube_sprite(const Axes& A, double s, double e) {
   for (int dv = int(std::floor(vmin - 1)); dv <= int(std::ceil(vmax + 1)); ++dv)
     for (int du = int(std::floor(umin - 1)); du <= int(std::ceil(umax + 1)); ++du) {
       const double pu = du + 0.5, pv = dv + 0.5;
-      int best = -1;
-      double best_depth = -0.5;  // signed distance inside a face, in pixels
+      std::pair<double, int> in[3];
+      int count = 0;
       for (int f = 0; f < 3; ++f) {
         const Face& F = faces[f];
         const double cross = F.a[0] * F.b[1] - F.a[1] * F.b[0];
@@ -87,9 +88,11 @@ std::vector<SpritePixel> cube_sprite(const Axes& A, double s, double e) {
         const double la = std::hypot(F.a[0], F.a[1]), lb = std::hypot(F.b[0], F.b[1]);
         const double ha = std::fabs(cross) / lb, hb = std::fabs(cross) / la;  // distance per unit alpha, beta
         const double depth = std::min({alpha * ha, (1 - alpha) * ha, beta * hb, (1 - beta) * hb});
-        if (depth > best_depth) best = f, best_depth = depth;
+        if (depth > -0.5) in[count++] = {depth, f};  // signed distance inside the face, in pixels
       }
-      if (best >= 0) out.push_back({du, dv, std::uint8_t(best)});
+      // Shallowest first: of the faces a cell draws, the one the pixel lies deepest in is written last.
+      std::sort(in, in + count);
+      for (int i = 0; i < count; ++i) out.push_back({du, dv, std::uint8_t(in[i].second)});
     }
   return out;
 }
@@ -156,15 +159,14 @@ RowRanges occupied_rows(const Result& r) {
   return R;
 }
 
-// Paints the visible voxels in an order where every voxel comes after all it can hide: z
-// ascending, then y and x descending (the view looks along +x, +y and -z). `cells` holds a label
-// per cell of `d`, x fastest; `shown(l)` says whether label l is drawn.
-template <class Shown>
-void paint(Image& img, const Dims& d, const std::uint32_t* cells, std::size_t k, const SceneProjection& P,
-           const Axes& A, const std::vector<SpritePixel>& sprite, const RowRanges& ranges, const Shown& shown) {
-  std::uint32_t cached = kNone;
-  Rgb shades[3];
-  const int vx0 = kViewX, vx1 = kViewX + kViewWidth, vy0 = kViewY, vy1 = kViewY + kViewHeight;
+// Calls visit(x, y, z, label, faces) for every cell that can be seen, in an order where every cell
+// comes after all it can hide: z ascending, then y and x descending (the view looks along +x, +y
+// and -z). `cells` holds a label per cell of `d`, x fastest; `shown(l)` says whether label l is
+// drawn. `faces` has bit 0 for a top face, 1 for a front (-y), 2 for a left (-x) face whose
+// neighbour is not drawn; a cell with none is covered by its neighbours and skipped.
+template <class Shown, class Visit>
+void for_each_visible(const Dims& d, const std::uint32_t* cells, const RowRanges& ranges, const Shown& shown,
+                      const Visit& visit) {
   const std::size_t nx = d.nx, plane = d.nx * d.ny;
   for (std::size_t z = 0; z < d.nz; ++z) {
     const bool top_layer = z + 1 == d.nz;
@@ -179,24 +181,25 @@ void paint(Image& img, const Dims& d, const std::uint32_t* cells, std::size_t k,
       for (std::size_t x = x_end; x-- > x_lo;) {
         const std::uint32_t l = row[x];
         if (!shown(l)) continue;
-        // A cell whose three visible neighbours are all drawn is covered by them.
-        if (x > 0 && y > 0 && !top_layer && shown(row[x - 1]) && shown(row[x - nx]) && shown(row[x + plane])) continue;
-        if (l != cached) {
-          const Rgb c = segment_colour(l);
-          shades[0] = shade(c, kShadeTop), shades[1] = shade(c, kShadeFront), shades[2] = shade(c, kShadeLeft);
-          cached = l;
-        }
-        const double fx = double(x * k), fy = double(y * k), fz = double(z * k);
-        const int iu = int(std::lround(P.u0 + P.scale * (fx * A.rx + fy * A.ry + fz * A.rz)));
-        const int iv = int(std::lround(P.v0 - P.scale * (fx * A.ux + fy * A.uy + fz * A.uz)));
-        for (const SpritePixel& p : sprite) {
-          const int u = iu + p.du, v = iv + p.dv;
-          if (u >= vx0 && u < vx1 && v >= vy0 && v < vy1) img.set(u, v, shades[p.face]);
-        }
+        const unsigned faces = (top_layer || !shown(row[x + plane]) ? 1u : 0u) |
+                               (y == 0 || !shown(row[x - nx]) ? 2u : 0u) | (x == 0 || !shown(row[x - 1]) ? 4u : 0u);
+        if (faces) visit(x, y, z, l, faces);
       }
     }
   }
 }
+
+// Occupied segments by id (1) among all (0).
+std::vector<std::uint8_t> occupied_table(const Result& r) {
+  std::vector<std::uint8_t> t(r.segments.size(), 0);
+  for (const Segment& s : r.segments)
+    if (s.state == State::occupied && s.voxels > 0 && s.id < t.size()) t[s.id] = 1;
+  return t;
+}
+
+// The projected area of a cube of edge e pixels, with the half pixel around each face: the
+// pixels a cell's sprite writes, about.
+double sprite_pixels(double e) { return 1.7 * (e + 1) * (e + 1); }
 
 }  // namespace
 
@@ -225,16 +228,26 @@ SceneProjection scene_projection(const Result& r) {
                       (kViewHeight - 2 * kMargin) / std::max(vmax - vmin, 1e-9), kMaxScale});
   P.u0 = kViewX + kViewWidth / 2.0 - P.scale * (umin + umax) / 2;
   P.v0 = kViewY + kViewHeight / 2.0 - P.scale * (vmin + vmax) / 2;
-  // Work: at most min(occupied voxels, cells) cubes of about 2 (edge + 1)^2 pixels each.
-  std::uint64_t occupied = 0;
+  // Work: the visible cells times their sprites. At k = 1 there are at most as many visible
+  // cells as occupied voxels, counted exactly (one scan) when that bound is too loose; a coarser
+  // grid has at most as many visible cells as the voxel grid (each has an empty neighbour block,
+  // and so a visible voxel of its own) and at most as many as it has cells.
+  std::uint64_t visible = 0;
   for (const Segment& s : r.segments)
-    if (s.state == State::occupied) occupied += s.voxels;
+    if (s.state == State::occupied) visible += s.voxels;
   const Dims& d = r.dims;
+  if (double(visible) * sprite_pixels(P.scale) > kPixelBudget && r.labels.size() == d.count()) {
+    const std::vector<std::uint8_t> occ = occupied_table(r);
+    const std::uint8_t* t = occ.data();
+    const std::size_t n = occ.size();
+    visible = 0;
+    for_each_visible(d, r.labels.data(), occupied_rows(r), [t, n](std::uint32_t l) { return l < n && t[l]; },
+                     [&visible](std::size_t, std::size_t, std::size_t, std::uint32_t, unsigned) { ++visible; });
+  }
   const std::size_t longest = std::max({d.nx, d.ny, d.nz, std::size_t(1)});
   for (std::size_t k = 1;; ++k) {
     const double cells = double((d.nx + k - 1) / k) * double((d.ny + k - 1) / k) * double((d.nz + k - 1) / k);
-    const double edge = P.scale * double(k) + 1;
-    if (std::min(double(occupied), cells) * 2 * edge * edge <= kPixelBudget || k >= longest) {
+    if (std::min(double(visible), cells) * sprite_pixels(P.scale * double(k)) <= kPixelBudget || k >= longest) {
       P.coarsen = k;
       break;
     }
@@ -247,13 +260,10 @@ Image render_scene(const Result& r, double voxel_size, const SceneOptions& o) {
   const SceneProjection P = scene_projection(r);
   Image img(kSceneWidth, kSceneHeight, kWhite);
   const Dims& d = r.dims;
-  std::vector<std::uint8_t> occupied(r.segments.size(), 0);
+  const std::vector<std::uint8_t> occupied = occupied_table(r);
   std::vector<const Segment*> occ;
   for (const Segment& s : r.segments)
-    if (s.state == State::occupied && s.voxels > 0) {
-      if (s.id < occupied.size()) occupied[s.id] = 1;
-      occ.push_back(&s);
-    }
+    if (s.state == State::occupied && s.voxels > 0) occ.push_back(&s);
   if (!o.title.empty()) draw_text(img, 6, 8, o.title.substr(0, (kSceneWidth - 12) / 6), kText);
 
   // The floor of the fitted box, faint, under everything.
@@ -267,14 +277,33 @@ Image render_scene(const Result& r, double voxel_size, const SceneOptions& o) {
   if (occ.empty()) {
     const std::string t = "no occupied segment";
     draw_text(img, kViewX + (kViewWidth - text_width(t)) / 2, kViewY + kViewHeight / 2, t, kText);
-  } else if (d.count() > 0) {
+  } else if (d.count() > 0 && r.labels.size() == d.count()) {
     const std::size_t k = P.coarsen;
     const std::vector<SpritePixel> sprite = cube_sprite(A, P.scale, double(k));
+    std::uint32_t cached = kNone;
+    Rgb shades[3];
+    // Only the faces without a drawn neighbour: a covered face's pixels, rounded differently from
+    // the neighbour's, would show through it as specks.
+    auto draw = [&](std::size_t x, std::size_t y, std::size_t z, std::uint32_t l, unsigned faces) {
+      if (l != cached) {
+        const Rgb c = segment_colour(l);
+        shades[0] = shade(c, kShadeTop), shades[1] = shade(c, kShadeFront), shades[2] = shade(c, kShadeLeft);
+        cached = l;
+      }
+      const double fx = double(x * k), fy = double(y * k), fz = double(z * k);
+      const int iu = int(std::lround(P.u0 + P.scale * (fx * A.rx + fy * A.ry + fz * A.rz)));
+      const int iv = int(std::lround(P.v0 - P.scale * (fx * A.ux + fy * A.uy + fz * A.uz)));
+      for (const SpritePixel& p : sprite) {
+        const int u = iu + p.du, v = iv + p.dv;
+        if ((faces >> p.face & 1u) && u >= kViewX && u < kViewX + kViewWidth && v >= kViewY && v < kViewY + kViewHeight)
+          img.set(u, v, shades[p.face]);
+      }
+    };
     const std::uint32_t* labels = r.labels.data();
     if (k == 1) {
-      const std::uint8_t* occ = occupied.data();
+      const std::uint8_t* t = occupied.data();
       const std::size_t n = occupied.size();
-      paint(img, d, labels, 1, P, A, sprite, occupied_rows(r), [occ, n](std::uint32_t l) { return l < n && occ[l]; });
+      for_each_visible(d, labels, occupied_rows(r), [t, n](std::uint32_t l) { return l < n && t[l]; }, draw);
     } else {
       // Cells of k^3 voxels, each holding the label of its topmost occupied voxel.
       const Dims c{(d.nx + k - 1) / k, (d.ny + k - 1) / k, (d.nz + k - 1) / k};
@@ -294,7 +323,7 @@ Image render_scene(const Result& r, double voxel_size, const SceneOptions& o) {
             if (l < occupied.size() && occupied[l]) crow[x / k] = l;
           }
         }
-      paint(img, c, cells.data(), k, P, A, sprite, RowRanges{}, [](std::uint32_t l) { return l != kNone; });
+      for_each_visible(c, cells.data(), RowRanges{}, [](std::uint32_t l) { return l != kNone; }, draw);
     }
   }
 
