@@ -91,11 +91,33 @@ assert scale == 96
 u, v = project(0.5, 0.5, 1)
 assert px[int(v)][int(u)] == segment_colour(s["id"])
 
-# --- a map of millions of occupied voxels: drawn coarsened (the legend says so) ---
-big = np.full((200, 128, 128), 0.1, dtype=np.float32)
-big[:, :, :] = np.where(np.random.default_rng(3).random((200, 128, 128)) < 0.5, 0.9, 0.1)
-doc, px = segment("noise", big, "--param", "occupied_connectivity=6")
-assert colours(px) & all_shades
+# --- maps of millions of occupied voxels. The legend's last line (after the segments, their
+# count and "free, unknown: not drawn") says when k x k x k voxels were drawn as one cell.
+def coarsening_note(doc, px):
+    n = len([s for s in doc["segments"] if s["state"] == "occupied"])
+    y = SCENE_VIEW[1] + 16 + 28 * min(8, n) + 10 + 10
+    return any(c == INK for row in px[y:y + 7] for c in row[vx + vw:])
+
+
+# A solid block of 2 million voxels: more than the budget if every voxel were visible, but only
+# its surface is: drawn voxel by voxel (no note), its top face in its colour where it projects.
+solid = np.full((100, 200, 200), 0.1, dtype=np.float32)
+solid[:50] = 0.9
+doc, px = segment("solid", solid)
+(s,) = [s for s in doc["segments"] if s["state"] == "occupied"]
+assert not coarsening_note(doc, px)
+scale, u0, v0, project = scene_projection([0, 0, 0], [200, 200, 50])
+u, v = project(100, 100, 50)
+assert region(px, u, v, 3) == {segment_colour(s["id"])}, region(px, u, v, 3)
+u, v = project(100, 0, 25)
+assert px[int(v)][int(u)] == tuple(int(c * 0.8) for c in segment_colour(s["id"]))
+# Random noise, half of 7.4 million voxels occupied: its visible voxels pass the budget, so it is
+# drawn again in cells (the note), still in the segments' colours.
+rng = np.random.default_rng(3)
+doc, px = segment("noise", np.where(rng.random((200, 192, 192)) < 0.5, 0.9, 0.1).astype(np.float32))
+assert coarsening_note(doc, px)
+big = max((s for s in doc["segments"] if s["state"] == "occupied"), key=lambda s: s["voxels"])
+assert scene_shades(big["id"]) & colours(px), scene_shades(big["id"])
 
 # --- scene.png cannot be written (a directory in its place): exit 2 naming it, nothing of the set ---
 os.makedirs(os.path.join(work, "blocked", "scene.png"))

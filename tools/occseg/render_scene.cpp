@@ -163,9 +163,10 @@ RowRanges occupied_rows(const Result& r) {
 // comes after all it can hide: z ascending, then y and x descending (the view looks along +x, +y
 // and -z). `cells` holds a label per cell of `d`, x fastest; `shown(l)` says whether label l is
 // drawn. `faces` has bit 0 for a top face, 1 for a front (-y), 2 for a left (-x) face whose
-// neighbour is not drawn; a cell with none is covered by its neighbours and skipped.
+// neighbour is not drawn; a cell with none is covered by its neighbours and skipped. A visit that
+// returns false stops the walk (then false is returned).
 template <class Shown, class Visit>
-void for_each_visible(const Dims& d, const std::uint32_t* cells, const RowRanges& ranges, const Shown& shown,
+bool for_each_visible(const Dims& d, const std::uint32_t* cells, const RowRanges& ranges, const Shown& shown,
                       const Visit& visit) {
   const std::size_t nx = d.nx, plane = d.nx * d.ny;
   for (std::size_t z = 0; z < d.nz; ++z) {
@@ -183,10 +184,11 @@ void for_each_visible(const Dims& d, const std::uint32_t* cells, const RowRanges
         if (!shown(l)) continue;
         const unsigned faces = (top_layer || !shown(row[x + plane]) ? 1u : 0u) |
                                (y == 0 || !shown(row[x - nx]) ? 2u : 0u) | (x == 0 || !shown(row[x - 1]) ? 4u : 0u);
-        if (faces) visit(x, y, z, l, faces);
+        if (faces && !visit(x, y, z, l, faces)) return false;
       }
     }
   }
+  return true;
 }
 
 // Occupied segments by id (1) among all (0).
@@ -228,22 +230,13 @@ SceneProjection scene_projection(const Result& r) {
                       (kViewHeight - 2 * kMargin) / std::max(vmax - vmin, 1e-9), kMaxScale});
   P.u0 = kViewX + kViewWidth / 2.0 - P.scale * (umin + umax) / 2;
   P.v0 = kViewY + kViewHeight / 2.0 - P.scale * (vmin + vmax) / 2;
-  // Work: the visible cells times their sprites. At k = 1 there are at most as many visible
-  // cells as occupied voxels, counted exactly (one scan) when that bound is too loose; a coarser
-  // grid has at most as many visible cells as the voxel grid (each has an empty neighbour block,
-  // and so a visible voxel of its own) and at most as many as it has cells.
+  // Work: the visible cells times their sprites. A grid has at most as many visible cells as it
+  // has cells, and, at any coarsening, at most as many as there are occupied voxels (a visible
+  // coarse cell borders an empty block, so a voxel of its own borders empty space).
   std::uint64_t visible = 0;
   for (const Segment& s : r.segments)
     if (s.state == State::occupied) visible += s.voxels;
   const Dims& d = r.dims;
-  if (double(visible) * sprite_pixels(P.scale) > kPixelBudget && r.labels.size() == d.count()) {
-    const std::vector<std::uint8_t> occ = occupied_table(r);
-    const std::uint8_t* t = occ.data();
-    const std::size_t n = occ.size();
-    visible = 0;
-    for_each_visible(d, r.labels.data(), occupied_rows(r), [t, n](std::uint32_t l) { return l < n && t[l]; },
-                     [&visible](std::size_t, std::size_t, std::size_t, std::uint32_t, unsigned) { ++visible; });
-  }
   const std::size_t longest = std::max({d.nx, d.ny, d.nz, std::size_t(1)});
   for (std::size_t k = 1;; ++k) {
     const double cells = double((d.nx + k - 1) / k) * double((d.ny + k - 1) / k) * double((d.nz + k - 1) / k);
@@ -270,16 +263,23 @@ Image render_scene(const Result& r, double voxel_size, const SceneOptions& o) {
   double lo[3], hi[3];
   fit_box(r, lo, hi);
   const double fx[4] = {lo[0], hi[0], hi[0], lo[0]}, fy[4] = {lo[1], lo[1], hi[1], hi[1]};
-  for (int i = 0; i < 4; ++i)
-    draw_line(img, P.u(fx[i], fy[i], lo[2]), P.v(fx[i], fy[i], lo[2]), P.u(fx[(i + 1) % 4], fy[(i + 1) % 4], lo[2]),
-              P.v(fx[(i + 1) % 4], fy[(i + 1) % 4], lo[2]), kFaint);
+  auto draw_floor = [&] {
+    for (int i = 0; i < 4; ++i)
+      draw_line(img, P.u(fx[i], fy[i], lo[2]), P.v(fx[i], fy[i], lo[2]), P.u(fx[(i + 1) % 4], fy[(i + 1) % 4], lo[2]),
+                P.v(fx[(i + 1) % 4], fy[(i + 1) % 4], lo[2]), kFaint);
+  };
+  draw_floor();
+  std::size_t coarsened = 1;  // what was drawn as one cell
 
   if (occ.empty()) {
     const std::string t = "no occupied segment";
     draw_text(img, kViewX + (kViewWidth - text_width(t)) / 2, kViewY + kViewHeight / 2, t, kText);
   } else if (d.count() > 0 && r.labels.size() == d.count()) {
-    const std::size_t k = P.coarsen;
-    const std::vector<SpritePixel> sprite = cube_sprite(A, P.scale, double(k));
+    // Voxel by voxel first: the bound on the visible voxels is loose (a solid block shows only its
+    // surface), so try, and coarsen only when the sprites really pass the budget.
+    std::size_t k = 1;
+    std::vector<SpritePixel> sprite = cube_sprite(A, P.scale, 1.0);
+    double budget = P.coarsen > 1 ? kPixelBudget : std::numeric_limits<double>::infinity();
     std::uint32_t cached = kNone;
     Rgb shades[3];
     // Only the faces without a drawn neighbour: a covered face's pixels, rounded differently from
@@ -298,13 +298,19 @@ Image render_scene(const Result& r, double voxel_size, const SceneOptions& o) {
         if ((faces >> p.face & 1u) && u >= kViewX && u < kViewX + kViewWidth && v >= kViewY && v < kViewY + kViewHeight)
           img.set(u, v, shades[p.face]);
       }
+      budget -= double(sprite.size());
+      return budget > 0;
     };
     const std::uint32_t* labels = r.labels.data();
-    if (k == 1) {
-      const std::uint8_t* t = occupied.data();
-      const std::size_t n = occupied.size();
-      for_each_visible(d, labels, occupied_rows(r), [t, n](std::uint32_t l) { return l < n && t[l]; }, draw);
-    } else {
+    const std::uint8_t* t = occupied.data();
+    const std::size_t n = occupied.size();
+    if (!for_each_visible(d, labels, occupied_rows(r), [t, n](std::uint32_t l) { return l < n && t[l]; }, draw)) {
+      // Past the budget: start again on the coarser grid, whose work the bound does hold.
+      k = coarsened = P.coarsen;
+      sprite = cube_sprite(A, P.scale, double(k));
+      budget = std::numeric_limits<double>::infinity();
+      img.fill_rect(kViewX, kViewY, kViewWidth, kViewHeight, kWhite);
+      draw_floor();
       // Cells of k^3 voxels, each holding the label of its topmost occupied voxel.
       const Dims c{(d.nx + k - 1) / k, (d.ny + k - 1) / k, (d.nz + k - 1) / k};
       std::vector<std::uint32_t> cells(c.count(), kNone);
@@ -375,9 +381,9 @@ Image render_scene(const Result& r, double voxel_size, const SceneOptions& o) {
   }
   draw_text(img, lx, ly, "free, unknown: not drawn", kText);
   ly += 10;
-  if (P.coarsen > 1)
-    draw_text(img, lx, ly, "each " + std::to_string(P.coarsen) + " x " + std::to_string(P.coarsen) + " x " +
-                               std::to_string(P.coarsen) + " voxels drawn as one", kText);
+  if (coarsened > 1)
+    draw_text(img, lx, ly, "each " + std::to_string(coarsened) + " x " + std::to_string(coarsened) + " x " +
+                               std::to_string(coarsened) + " voxels drawn as one", kText);
   return img;
 }
 

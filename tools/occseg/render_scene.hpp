@@ -31,9 +31,12 @@ constexpr int kViewX = 6, kViewY = 30, kViewWidth = 700, kViewHeight = 640;
 constexpr double kSceneAzimuthDeg = 30, kSceneElevationDeg = 35;
 constexpr double kShadeTop = 1.0, kShadeFront = 0.80, kShadeLeft = 0.62;
 
-// The projection of a map: voxel units to pixels, and the coarsening that keeps the work bounded
-// (every `coarsen` voxels along each axis drawn as one, occupied when any of its voxels is; 1 for
-// all but maps of millions of occupied voxels).
+// The projection of a map: voxel units to pixels, and the coarsening that keeps the work bounded:
+// `coarsen` voxels along each axis drawn as one cell (occupied when any of its voxels is), the
+// smallest for which min(occupied voxels, cells) sprites fit the pixel budget; 1 for all but maps
+// of millions of occupied voxels. render_scene draws voxel by voxel all the same while the
+// sprites it really draws (the visible voxels') stay within the budget, and only past it the
+// coarsened grid.
 struct SceneProjection {
   double scale = 1;          // pixels per voxel edge
   double u0 = 0, v0 = 0;     // where the voxel corner (0, 0, 0) is drawn
