@@ -46,7 +46,7 @@ def check(name, args, cloud=False, grid=False):
     r = run("segment", *args, "--out", out)
     assert r.returncode == 0, (name, r.stderr)
     files = sorted(os.listdir(out))
-    want = ["labels.npy", "labels.nrrd", "segmentation.png", "segments.json"] + ([] if grid else ["map.nrrd"]) + (
+    want = ["labels.npy", "labels.nrrd", "scene.png", "segmentation.png", "segments.json"] + ([] if grid else ["map.nrrd"]) + (
         ["segments.pcd"] if cloud else []) + (["points.labels.npy", "points.pcd"] if name.startswith("pcd") else [])
     assert files == sorted(want), (name, files)
     labels = np.load(os.path.join(out, "labels.npy"))

@@ -10,7 +10,8 @@ import sys
 
 import numpy as np
 
-from pngcheck import FREE, OCCUPIED_HUES, UNKNOWN, colours, figure_size, read_png
+from pngcheck import (FREE, OCCUPIED_HUES, SCENE_SIZE, SCENE_VIEW, UNKNOWN, colours, figure_layout, figure_size, read_png,
+                      scene_shades)
 
 occseg, work = sys.argv[1], sys.argv[2]
 
@@ -23,7 +24,7 @@ r = run()
 assert r.returncode == 0 and r.stderr == "", (r.returncode, r.stderr)
 assert "occseg-out/segmentation.png" in r.stdout and "scores against the ground truth" in r.stdout, r.stdout
 out = os.path.join(work, "occseg-out")
-expected = ["evaluation.json", "evaluation.txt", "labels.npy", "labels.nrrd", "map.npy", "scene.json",
+expected = ["evaluation.json", "evaluation.txt", "labels.npy", "labels.nrrd", "map.npy", "scene.json", "scene.png",
             "segmentation.png", "segments.json", "summary.json", "truth_objects.npy", "truth_state.npy"]
 assert sorted(os.listdir(out)) == expected, sorted(os.listdir(out))
 
@@ -64,14 +65,23 @@ assert summary["largest_objects"][0]["voxels"] == max(s["voxels"] for s in segs 
 
 # The picture: map, segments and ideal state in three rows; the state colours are there.
 w, h, px = read_png(os.path.join(out, "segmentation.png"))
-assert (w, h) == figure_size((320, 320, 128), rows=3) == (1962, 1050), (w, h)
+title = "occseg demo: cone (planar, 320 x 320 x 128, seed 1, preset default)"
+assert (w, h) == figure_size((320, 320, 128), rows=3, title=title) == (2288, 1064), (w, h)
+layout = figure_layout((320, 320, 128), ["map", "segments", "ideal state"], title, ideal=True)
 used = colours(px)
 assert FREE in used and UNKNOWN in used and used & OCCUPIED_HUES, used
 # Free space around the sensors: the segments row at voxel (160, 40) of the z = 16 slice is free,
 # as its ideal state is.
 assert truth[16, 40, 160] == 0 and labels[16, 40, 160] in [s["id"] for s in segs if s["state"] == "free"]
-py = 6 + 14 + (10 + 320 + 6) + 10 + (320 - 1 - 40)
+py = layout["rows"][1] + (320 - 1 - 40)
 assert px[py][6 + 160] == FREE, px[py][6 + 160]
+# The 3D picture: the cone (the largest occupied segment) in its colour, in the view.
+w, h, px = read_png(os.path.join(out, "scene.png"))
+assert (w, h) == SCENE_SIZE, (w, h)
+cone = max((s for s in segs if s["state"] == "occupied"), key=lambda s: s["voxels"])
+vx, vy, vw, vh = SCENE_VIEW
+view = colours([row[vx:vx + vw] for row in px[vy:vy + vh]])
+assert scene_shades(cone["id"]) <= view, (scene_shades(cone["id"]), len(view))
 
 assert not glob.glob(os.path.join(out, "*.tmp-*"))
 

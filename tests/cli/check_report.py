@@ -9,7 +9,8 @@ import sys
 
 import numpy as np
 
-from pngcheck import FREE, OCCUPIED_HUES, UNKNOWN, colours, figure_size, read_png
+from pngcheck import (FREE, INK, OCCUPIED_HUES, SEGMENT_PALETTE as OCCUPIED_PALETTE, UNKNOWN, colours, figure_layout,
+                      figure_size, read_png, segment_colour, shade)
 
 occseg, work = sys.argv[1], sys.argv[2]
 
@@ -28,7 +29,7 @@ np.save(os.path.join(work, "map.npy"), m)
 r = run("segment", "map.npy", "--voxel-size", "0.5", "--out", "out")
 assert r.returncode == 0 and r.stderr == "", (r.returncode, r.stderr)
 files = sorted(os.listdir(os.path.join(work, "out")))
-assert files == ["labels.npy", "labels.nrrd", "segmentation.png", "segments.json"], files
+assert files == ["labels.npy", "labels.nrrd", "scene.png", "segmentation.png", "segments.json"], files
 doc = json.load(open(os.path.join(work, "out", "segments.json")))
 states = [s["state"] for s in doc["segments"]]
 assert states.count("occupied") == 2 and states.count("unknown") == 1, states
@@ -44,26 +45,48 @@ assert re.search(r"\(15\.0, 12\.5, 10\.0\)\s+\(25\.0, 20\.0, 17\.5\)\s+10\.0 x 7
 assert re.search(r"\(2\.5, 2\.5, 2\.5\)\s+\(7\.5, 7\.5, 7\.5\)\s+5\.0 x 5\.0 x 5\.0$", out, re.M), out
 assert re.search(r"^time: read [\d.]+ s, texture [\d.]+ s, division [\d.]+ s, creation [\d.]+ s, "
                  r"refinement [\d.]+ s, labelling [\d.]+ s, write [\d.]+ s; total [\d.]+ s$", out, re.M), out
-assert "written: out/labels.npy out/labels.nrrd out/segments.json out/segmentation.png" in out, out
+assert "written: out/labels.npy out/labels.nrrd out/segments.json out/segmentation.png out/scene.png" in out, out
 
-# The picture: two rows (map, segments), four z slices and a y and an x slice; the size follows
-# the layout of docs/cli.md; voxels of known state show their state's colour.
+# The picture: two rows (map, segments), four z slices, a y and an x slice and the top view; the
+# size and the places follow the layout of docs/cli.md; voxels of known state show their state's
+# colour.
 w, h, px = read_png(os.path.join(work, "out", "segmentation.png"))
-assert (w, h) == figure_size((56, 48, 40), rows=2) == (1354, 458), (w, h)
+title = "occseg segment map.npy  (56 x 48 x 40, preset default)"
+layout = figure_layout((56, 48, 40), ["map", "segments"], title, yx=(32, 40))  # the big box's centroid
+assert (w, h) == (layout["width"], layout["height"]) == figure_size((56, 48, 40), rows=2, title=title) == (1584, 472), (w, h)
 used = colours(px)
 assert FREE in used and UNKNOWN in used and used & OCCUPIED_HUES, used
-scale, caption, pad, top = 4, 10, 6, 6 + 14  # 256 // 56 pixels per voxel; title row 14 px
-row_h = 48 * scale
+scale = 4  # 256 // 56 pixels per voxel
 
 
 def pixel(row, column_x0, x, y):
     """Colour at the centre of voxel (x, y) of a z-slice panel (y up) in figure row `row`."""
-    py = top + row * (caption + row_h + pad) + caption + (48 - 1 - y) * scale + scale // 2
+    py = layout["rows"][row] + (48 - 1 - y) * scale + scale // 2
     return px[py][column_x0 + x * scale + scale // 2]
 
 
-z5 = 6  # the first column: z = (2 * 0 + 1) * 40 // 8 = 5, through the small box
-assert pixel(1, z5, 10, 10) in OCCUPIED_HUES, pixel(1, z5, 10, 10)
+small = next(s["id"] for s in doc["segments"] if s["state"] == "occupied" and s["voxels"] == 1000)
+big = next(s["id"] for s in doc["segments"] if s["state"] == "occupied" and s["voxels"] == 4500)
+z5 = layout["columns"][0]  # the first column: z = (2 * 0 + 1) * 40 // 8 = 5, through the small box
+assert [c[0] for c in layout["captions"]] == ["z = 5", "z = 15", "z = 25", "z = 35", "y = 32", "x = 40", "top view"]
+assert pixel(1, z5, 6, 6) == segment_colour(small), (pixel(1, z5, 6, 6), segment_colour(small))
+# The larger segments carry their id: dark text on a white box inside the small box's square.
+square = [px[layout["rows"][1] + (48 - 1 - y) * scale + j][z5 + x * scale + i]
+          for y in range(5, 15) for x in range(5, 15) for i in range(scale) for j in range(scale)]
+assert INK in square and (255, 255, 255) in square, set(square)
+# The top view: each box's colour where it lies, shaded by the height of its top (z 14 of 40:
+# level 14 * 6 // 40 = 2, factor 0.5 + 0.5 * 2 / 5 = 0.7; z 34: level 5, factor 1), the rest the
+# grey of columns without an occupied voxel.
+top = layout["columns"][6]
+assert pixel(1, top, 6, 6) == shade(segment_colour(small), 0.7), pixel(1, top, 6, 6)
+assert pixel(1, top, 32, 27) == segment_colour(big), pixel(1, top, 32, 27)
+assert pixel(1, top, 20, 20) == (225, 225, 225), pixel(1, top, 20, 20)
+assert pixel(0, top, 32, 27) == (5, 5, 5) and pixel(0, top, 20, 20) == (220, 220, 220)  # largest p of the column
+# The legend shows the palette, not a single occupied colour (no row here without segments).
+legend = {k: (x, y) for k, x, y in layout["legend"]}
+assert "occupied" not in legend, legend
+lx, ly = legend["segments"]
+assert [px[ly + 5][lx + 3 * i + 1] for i in range(16)] == list(OCCUPIED_PALETTE), px[ly + 5][lx:lx + 48]
 assert pixel(1, z5, 30, 10) == FREE and pixel(1, z5, 3, 45) == UNKNOWN, (pixel(1, z5, 30, 10), pixel(1, z5, 3, 45))
 # The map row is grey: level round(50 (1 - p)) of 51, times 5; float32 0.97 is 0.97000003, level
 # 1 (1.4999985 rounds down); 0.12 gives level 44, 0.5 level 25.
@@ -85,7 +108,8 @@ assert big["voxels"] == 4500 and big["bbox_voxels"] == {"min": [30, 25, 20], "ma
 assert big["bbox_m"] == {"min": [15.0, 12.5, 10.0], "max": [25.0, 20.0, 17.5]} and big["size_m"] == [10.0, 7.5, 7.5], big
 assert set(j["seconds"]) == {"read", "texture", "division", "creation", "refinement", "labelling", "write", "total"}
 assert abs(sum(v for k, v in j["seconds"].items() if k != "total") - j["seconds"]["total"]) < 1e-9, j["seconds"]
-assert j["files"] == [f"out_json/{f}" for f in ("labels.npy", "labels.nrrd", "segments.json", "segmentation.png")]
+assert j["files"] == [f"out_json/{f}" for f in ("labels.npy", "labels.nrrd", "segments.json", "segmentation.png",
+                                                 "scene.png")]
 
 # --quiet: nothing on stdout or stderr, the same files.
 r = run("segment", "map.npy", "--out", "out_quiet", "--quiet", "--threads", "1")
@@ -131,5 +155,7 @@ np.save(os.path.join(work, "flat.npy"), m[10:11])
 r = run("segment", "flat.npy", "--out", "flat", "--quiet")
 assert r.returncode == 0, r.stderr
 w, h, _ = read_png(os.path.join(work, "flat", "segmentation.png"))
-assert (w, h) == figure_size((56, 48, 1), rows=2) == (470, 458), (w, h)
+# Narrower than the title: the title is wrapped onto two lines, the legend onto four.
+assert (w, h) == figure_size((56, 48, 1), rows=2, title="occseg segment flat.npy  (56 x 48 x 1, preset default)") == (
+    256, 510), (w, h)
 print("cli report: all checks passed")

@@ -63,7 +63,7 @@ assert code == 0, (code, text)
 bars = BAR.findall(text)
 assert bars and any("segmenting: " in b or "writing " in b for b in bars), text
 assert "\r" in text and "written: seg/labels.npy" in text, text
-assert sorted(os.listdir(os.path.join(work, "seg"))) == ["labels.npy", "labels.nrrd", "segmentation.png", "segments.json"]
+assert sorted(os.listdir(os.path.join(work, "seg"))) == ["labels.npy", "labels.nrrd", "scene.png", "segmentation.png", "segments.json"]
 
 # No terminal (pipes), or --quiet: no bar, nothing on stderr.
 r = subprocess.run([occseg, *job, "--out", "seg_pipe"], cwd=work, capture_output=True, text=True)

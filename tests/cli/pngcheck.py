@@ -84,22 +84,145 @@ def colours(rows):
 # occseg's state colours (tools/occseg/render_png.cpp, documented in docs/cli.md).
 FREE = (150, 200, 255)
 UNKNOWN = (245, 245, 245)
-OCCUPIED_HUES = {(235, 120, 40), (200, 40, 40), (150, 90, 30), (220, 60, 160), (230, 185, 30), (140, 50, 150),
-                 (90, 150, 50), (250, 100, 100)}
+INK = (30, 30, 30)
+# The palette of occupied segments (adapters/include/occseg/segment_colour.hpp, docs/cli.md).
+SEGMENT_PALETTE = [(235, 120, 40), (200, 40, 40), (150, 90, 30), (220, 60, 160), (230, 185, 30), (140, 50, 150),
+                   (90, 150, 50), (250, 100, 100), (30, 130, 130), (50, 70, 170), (170, 170, 40), (120, 210, 110),
+                   (110, 70, 220), (240, 150, 200), (130, 30, 70), (160, 220, 60)]
+OCCUPIED_HUES = set(SEGMENT_PALETTE)
 
 
-def figure_size(dims, rows, title=True):
-    """Size of a segmentation.png as docs/cli.md lays it out, for a map of dims (nx, ny, nz) and
-    `rows` volumes: four z slices (every z when nz < 4), then a y and an x slice when nz > 1."""
+def segment_colour(segment_id):
+    """The colour of occupied segment `segment_id`: palette[(id * 2654435761 mod 2^32) >> 16 mod 16]."""
+    return SEGMENT_PALETTE[(((segment_id * 2654435761) & 0xFFFFFFFF) >> 16) % 16]
+
+
+def shade(c, f):
+    """A colour scaled by f, each channel rounded down (render::shade)."""
+    return tuple(int(v * f) for v in c)
+
+
+def darker(c):
+    return tuple(int(v * 0.55) for v in c)
+
+
+# scene.png (tools/occseg/render_scene.hpp, docs/cli.md "The 3D picture").
+SCENE_SIZE = (960, 720)
+SCENE_VIEW = (6, 30, 700, 640)  # x, y, width, height
+SCENE_FACES = (1.0, 0.80, 0.62)  # top, front (-y), left (-x)
+
+
+def scene_shades(segment_id):
+    return {shade(segment_colour(segment_id), f) for f in SCENE_FACES}
+
+
+def scene_projection(box_lo, box_hi):
+    """(scale, u0, v0, project) of scene.png for the occupied box [lo, hi) in voxel units, as
+    docs/cli.md states it; project(x, y, z) gives the pixel (u, v)."""
+    import math
+    a, e = math.radians(30), math.radians(35)
+    R = (math.cos(a), -math.sin(a), 0.0)
+    U = (math.sin(a) * math.sin(e), math.cos(a) * math.sin(e), math.cos(e))
+    us, vs = [], []
+    for i in range(8):
+        p = [box_hi[k] if i >> k & 1 else box_lo[k] for k in range(3)]
+        us.append(sum(p[k] * R[k] for k in range(3)))
+        vs.append(-sum(p[k] * U[k] for k in range(3)))
+    vx, vy, vw, vh = SCENE_VIEW
+    s = min((vw - 24) / (max(us) - min(us)), (vh - 24) / (max(vs) - min(vs)), 96)
+    u0 = vx + vw / 2 - s * (min(us) + max(us)) / 2
+    v0 = vy + vh / 2 - s * (min(vs) + max(vs)) / 2
+
+    def project(x, y, z):
+        return (u0 + s * (x * R[0] + y * R[1] + z * R[2]), v0 - s * (x * U[0] + y * U[1] + z * U[2]))
+    return s, u0, v0, project
+
+
+LEGEND_TEXT = {"free": "free", "unknown": "unknown", "occupied": "occupied",
+               "segments": "occupied: one colour per segment", "boundary": "boundary",
+               "empty_column": "top view: no occupied voxel (lower is darker)", "probability": "p 0 to 1"}
+LEGEND_SWATCH = {"segments": 48, "probability": 102}
+
+
+def _wrap(text, max_width):
+    chars = max(1, max_width // 6)
+    lines, line = [], ""
+    for word in [w for w in text.split(" ") if w]:
+        while len(word) > chars:
+            if line:
+                lines.append(line)
+                line = ""
+            lines.append(word[:chars])
+            word = word[chars:]
+        if not line:
+            line = word
+        elif len(line) + 1 + len(word) <= chars:
+            line += " " + word
+        else:
+            lines.append(line)
+            line = word
+    if line:
+        lines.append(line)
+    return lines
+
+
+def figure_layout(dims, row_titles, title, ideal=False, yx=None):
+    """Layout of a segmentation.png as docs/cli.md describes it, for a map of dims (nx, ny, nz)
+    and rows titled `row_titles` (map, segments[, ideal state]): four z slices (every z when
+    nz < 4), then a y and an x slice (at yx = (y, x), default the middle) and the top view when
+    nz > 1. Returns a dict: width, height, title lines [(text, x, y)], captions [(text, x, y)],
+    columns [x], rows [y of the panels], panels [(w, h)] per column, legend [(kind, x, y)]."""
     nx, ny, nz = dims
     m = max(dims)
     shrink = (m + 639) // 640
     scale = min(8, max(1, 256 // m))
     px = lambda n: (n + shrink - 1) // shrink * scale
-    panels = [(px(nx), px(ny))] * (4 if nz >= 4 else nz)  # (width, height) of z slices
+    if nz >= 4:
+        slices = [("z = %d" % ((2 * k + 1) * nz // 8), px(nx), px(ny)) for k in range(4)]
+    else:
+        slices = [("z = %d" % z, px(nx), px(ny)) for z in range(nz)]
     if nz > 1:
-        panels += [(px(nx), px(nz)), (px(ny), px(nz))]
-    width = 6 + sum(w + 6 for w, _ in panels)
-    width = max(width, 470)
-    height = 6 + (14 if title else 0) + rows * (10 + max(h for _, h in panels) + 6) + 22
-    return width, height
+        y, x = yx if yx else (ny // 2, nx // 2)
+        slices += [("y = %d" % y, px(nx), px(nz)), ("x = %d" % x, px(ny), px(nz)), ("top view", px(nx), px(ny))]
+    col_w = [max(w, 6 * len(c) + 6) for c, w, _ in slices]
+    content = 6 + sum(w + 6 for w in col_w)
+    kinds = ["free", "unknown"] + (["occupied"] if ideal else []) + ["segments", "boundary"]
+    kinds += (["empty_column"] if nz > 1 else []) + ["probability"]
+    item_w = lambda k: LEGEND_SWATCH.get(k, 10) + 4 + 6 * len(LEGEND_TEXT[k])
+    width = max([content, 160] + [item_w(k) + 12 for k in kinds] + [6 * len(t) + 12 for t in row_titles])
+    out = {"width": width, "title": [], "captions": [], "columns": [], "rows": [], "legend": [],
+           "panels": [(w, h) for _, w, h in slices]}
+    y = 6
+    if title:
+        for line in _wrap(title, width - 12):
+            out["title"].append((line, 6, y))
+            y += 10
+        y += 4
+    x = 6
+    for (c, _, _), w in zip(slices, col_w):
+        out["captions"].append((c, x, y))
+        out["columns"].append(x)
+        x += w + 6
+    y += 14
+    row_h = max(h for _, _, h in slices)
+    for _ in row_titles:
+        y += 10
+        out["rows"].append(y)
+        y += row_h + 6
+    x, ly = 6, y + 2
+    for k in kinds:
+        w = item_w(k)
+        if x > 6 and x + w > width - 6:
+            x, ly = 6, ly + 14
+        out["legend"].append((k, x, ly))
+        x += w + 10
+    out["height"] = ly + 14 + 6
+    return out
+
+
+def figure_size(dims, rows, title="occseg segment map.npy"):
+    """Size of a segmentation.png (figure_layout) with `rows` volumes (2: map, segments; 3: and the
+    ideal state)."""
+    titles = ["map", "segments", "ideal state"][:rows]
+    L = figure_layout(dims, titles, title, ideal=rows == 3)
+    return L["width"], L["height"]

@@ -99,6 +99,8 @@ png = open(os.path.join(fig, "cone.png"), "rb").read()
 assert png[:8] == b"\x89PNG\r\n\x1a\n" and b"IHDR" in png[:16] and b"IEND" in png[-12:], png[:16]
 width, height = int.from_bytes(png[16:20], "big"), int.from_bytes(png[20:24], "big")
 assert width >= 3 * 64 and height >= 5 * 64, (width, height)  # 3 slices x 5 rows of 64-voxel panels
+png = open(os.path.join(fig, "cone-scene.png"), "rb").read()  # the default preset's segments in 3D
+assert png[:8] == b"\x89PNG\r\n\x1a\n" and (int.from_bytes(png[16:20], "big"), int.from_bytes(png[20:24], "big")) == (960, 720)
 table = open(os.path.join(fig, "results-planar.md")).read()
 assert "| cone | paper |" in table and "| cone | ideal | 100.00 |" in table, table
 res = json.load(open(os.path.join(fig, "results-planar.json")))

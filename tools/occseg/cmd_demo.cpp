@@ -1,7 +1,7 @@
 // `occseg demo` (and `occseg` without arguments): the main job on an embedded default. Simulates
 // the paper's cone scene (320 x 320 x 128 voxels of 4 cm, planar scans, seed 1), segments it,
 // scores the segmentation against the ground truth and writes everything to ./occseg-out/:
-// the map and its truth, labels, segments, the picture, the scores and a summary.
+// the map and its truth, labels, segments, the pictures, the scores and a summary.
 #include <chrono>
 #include <cstdint>
 #include <iostream>
@@ -68,6 +68,7 @@ void print_demo_summary(std::ostream& os, RunReport rep, const sim::Scene& scene
   const std::string d = dir + "/";
   os << "\nLook at " << d << "segmentation.png first. Everything is in " << d << ":\n"
      << "  segmentation.png   slices through the map, the segments and the ideal state\n"
+     << "  scene.png          the occupied segments in 3D, one colour per segment\n"
      << "  segments.json      the segment table: state, voxels, mean probability, box, centroid\n"
      << "  labels.npy         segment id per voxel, uint32 [z, y, x]; labels.nrrd for ParaView/3D Slicer\n"
      << "  map.npy            the simulated map, float32 [z, y, x]: try `occseg segment " << d
@@ -124,6 +125,11 @@ int run(const DemoArgs& o) {
                                     std::to_string(d.nz) + ", seed " + std::to_string(o.seed) + ", preset " + preset +
                                     ")",
                                 map, r, &truth.state, &staged);
+       }},
+      {"scene.png",
+       [&](const std::string& f, StagedFiles& staged) {
+         write_scene_png(f, "occseg demo: " + scene.name + ", preset " + preset + ", occupied segments", map, r,
+                         &staged);
        }},
       {"labels.npy", [&](const std::string& f, StagedFiles& s) { write_labels_npy(f, r.dims, r.labels, &s); }},
       {"labels.nrrd", [&](const std::string& f, StagedFiles& s) { write_labels_nrrd(f, map, r.labels, "", &s); }},

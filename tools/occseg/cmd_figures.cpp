@@ -1,7 +1,8 @@
 // `occseg figures --out DIR`: the experiments of docs/experiments.md in one command. For each
 // scene: simulate, segment with both presets, the baseline and the ideal labelling, score them,
 // and draw a picture like the paper's Figures 5-7 ((a) the map, (b) after segment creation, (c)
-// after refinement, plus the default preset and the ideal state). Writes DIR/<scene>.png,
+// after refinement, plus the default preset and the ideal state) and the default preset's occupied
+// segments in 3D (as scene.png of `occseg segment`). Writes DIR/<scene>.png, DIR/<scene>-scene.png,
 // DIR/results-<mode>.md and DIR/results-<mode>.json, all or none (OutputSet): a failure or Ctrl-C
 // leaves the old files of DIR as they were.
 #include <cstdint>
@@ -21,6 +22,7 @@
 #include "outputs.hpp"
 #include "progress.hpp"
 #include "render_png.hpp"
+#include "render_scene.hpp"
 #include "sim_io.hpp"
 
 namespace occseg::cli {
@@ -133,6 +135,14 @@ int run(const FiguresOptions& o) {
         render::write_png(f, render::render_figure(rows, slices, fo), &s);
       });
       std::cout << ", picture " << out.path(file);
+      // The default preset's occupied segments in 3D, as `occseg segment` draws them (scene.png).
+      const std::string scene_file = name + suffix + "-scene.png";
+      render::SceneOptions so;
+      so.title = "occseg: " + name + " (" + sim::scan_mode_name(config.mode) + "), default preset, occupied segments";
+      out.write(scene_file, [&](const std::string& f, StagedFiles& s) {
+        render::write_png(f, render::render_scene(dflt, o.voxel_size, so), &s);
+      });
+      std::cout << ", " << out.path(scene_file);
     }
     std::cout << "\n";
   }

@@ -1,5 +1,5 @@
 // `occseg segment IN --out DIR`: segment a map (.npy .nrrd .pcd .graph .bt .ot, see map_input)
-// and write labels.npy, labels.nrrd, segments.json and segmentation.png, plus map.nrrd for inputs
+// and write labels.npy, labels.nrrd, segments.json, segmentation.png and scene.png, plus map.nrrd for inputs
 // that were not grids, segments.pcd for point clouds and segmentation.pgm + segmentation.yaml (a
 // map_server map) for 2D maps (nz = 1), points.labels.npy and points.pcd (labels on the input
 // points) for .pcd clouds; then a summary on stdout (text or --json). All outputs or
@@ -46,6 +46,24 @@ std::string base_name(const std::string& path) {
   return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
+// The title of scene.png: the input, the map's size and voxel, the preset.
+std::string picture_title(const std::string& input, const Grid& grid, const std::string& preset) {
+  const Dims& d = grid.dims;
+  std::ostringstream title;
+  title << "occseg segment " << base_name(input) << "  (" << d.nx << " x " << d.ny << " x " << d.nz << " voxels of "
+        << grid.voxel_size << " m, preset " << preset << ")";
+  return title.str();
+}
+
+using Writer = std::function<void(const std::string&, StagedFiles&)>;
+using FileList = std::vector<std::pair<std::string, Writer>>;
+
+// The outputs, in the order written: a name and its writer. Out of line: GCC 12 inlines the
+// vector's growth into run() and then warns wrongly (-Warray-bounds) about its empty array.
+[[gnu::noinline]] void add_file(FileList& files, const char* name, Writer write) {
+  files.emplace_back(name, std::move(write));
+}
+
 int run(const SegmentArgs& o) {
   install_interrupt_handlers();  // Ctrl-C cancels through the progress callbacks
   Params params = make_params(o.pipeline);
@@ -67,17 +85,17 @@ int run(const SegmentArgs& o) {
 
   t = std::chrono::steady_clock::now();
   const std::string preset = preset_name(params.preset);
-  std::vector<std::pair<std::string, std::function<void(const std::string&, StagedFiles&)>>> files;
-  files.emplace_back("labels.npy",
+  FileList files;
+  add_file(files, "labels.npy",
                      [&](const std::string& f, StagedFiles& s) { write_labels_npy(f, r.dims, r.labels, &s); });
   // In the input's space (an LPS volume's labels in LPS, lying on it in 3D Slicer).
-  files.emplace_back("labels.nrrd", [&](const std::string& f, StagedFiles& s) {
+  add_file(files, "labels.nrrd", [&](const std::string& f, StagedFiles& s) {
     write_labels_nrrd(f, grid, r.labels, input.nrrd_space, &s);
   });
   if (input.kind != InputKind::volume)
-    files.emplace_back("map.nrrd", [&](const std::string& f, StagedFiles& s) { write_grid_nrrd(f, grid, "", &s); });
+    add_file(files, "map.nrrd", [&](const std::string& f, StagedFiles& s) { write_grid_nrrd(f, grid, "", &s); });
   if (input.kind == InputKind::cloud && have_pcl())
-    files.emplace_back("segments.pcd",
+    add_file(files, "segments.pcd",
                        [&](const std::string& f, StagedFiles& s) { write_cloud_output(f, grid, r, &s); });
   // Labels back on the input points (issue 26), for .pcd inputs; computed once for both files.
   std::vector<std::uint32_t> point_labels;
@@ -96,22 +114,25 @@ int run(const SegmentArgs& o) {
   std::vector<std::uint8_t> states;
   if (grid.dims.nz == 1) {  // a 2D map: also as the PGM/YAML pair map_server (a 2D planner) loads
     states = voxel_states(r);
-    files.emplace_back("segmentation.pgm",
+    add_file(files, "segmentation.pgm",
                        [&](const std::string& f, StagedFiles& s) { write_state_pgm(f, grid.dims, states, &s); });
-    files.emplace_back("segmentation.yaml", [&](const std::string& f, StagedFiles& s) {
+    add_file(files, "segmentation.yaml", [&](const std::string& f, StagedFiles& s) {
       write_map_yaml(f, "segmentation.pgm", grid, &s);
     });
   }
-  files.emplace_back("segments.json", [&](const std::string& f, StagedFiles& s) {
+  add_file(files, "segments.json", [&](const std::string& f, StagedFiles& s) {
     write_file_atomically(f, [&](std::ostream& os) { write_segments_json(os, r, preset); }, &s);
   });
-  files.emplace_back("segmentation.png", [&](const std::string& f, StagedFiles& s) {
+  add_file(files, "segmentation.png", [&](const std::string& f, StagedFiles& s) {
     const Dims& d = grid.dims;
     write_segmentation_png(f,
                            "occseg segment " + base_name(o.input) + "  (" + std::to_string(d.nx) + " x " +
                                std::to_string(d.ny) + " x " + std::to_string(d.nz) + ", preset " + preset + ")",
                            grid, r, nullptr, &s);
   });
+  // Default output (issue 25): the 3D picture of the occupied segments.
+  const std::string scene_title = picture_title(o.input, grid, preset);
+  add_file(files, "scene.png", [&](const std::string& f, StagedFiles& s) { write_scene_png(f, scene_title, grid, r, &s); });
   for (std::size_t k = 0; k < files.size(); ++k) {
     bar.update("writing " + files[k].first, double(k) / double(files.size()));
     out.write(files[k].first, files[k].second);

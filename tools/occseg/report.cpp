@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "render_png.hpp"
+#include "render_scene.hpp"
 
 namespace occseg::cli {
 
@@ -177,6 +178,7 @@ void write_segmentation_png(const std::string& path, const std::string& title, c
     }
     slices.push_back({1, y});
     slices.push_back({0, x});
+    slices.push_back({render::kTopView, 0});  // a room's contents seen from above
   }
   const std::vector<std::uint8_t> states = voxel_states(r);
   std::vector<render::Volume> rows;
@@ -189,6 +191,13 @@ void write_segmentation_png(const std::string& path, const std::string& title, c
   o.shrink = static_cast<int>((m + 639) / 640);                        // panels of at most 640 pixels
   o.scale = static_cast<int>(std::clamp<std::size_t>(256 / m, 1, 8));  // small maps magnified
   render::write_png(path, render::render_figure(rows, slices, o), into);
+}
+
+void write_scene_png(const std::string& path, const std::string& title, const Grid& grid, const Result& r,
+                     StagedFiles* into) {
+  render::SceneOptions o;
+  o.title = title;
+  render::write_png(path, render::render_scene(r, grid.voxel_size, o), into);
 }
 
 }  // namespace occseg::cli

@@ -45,10 +45,16 @@ void print_summary(std::ostream& out, const RunReport& run);
 nlohmann::json summary_json(const RunReport& run);
 
 // segmentation.png: orthogonal slices (up to four z levels, a y and an x slice through the
-// largest object, or the middle when there is none) through the map (grey), the segmentation
-// (state colours, segment boundaries, each occupied segment its own hue) and, when given, an
-// ideal state (the demo's ground truth), with a legend. Slices and scale: see docs/cli.md.
+// largest object, or the middle when there is none, and the top view) through the map (grey),
+// the segmentation (state colours, segment boundaries, each occupied segment in its palette
+// colour, ids on the larger ones) and, when given, an ideal state (the demo's ground truth), with
+// a legend. Slices, layout and scale: see docs/cli.md.
 void write_segmentation_png(const std::string& path, const std::string& title, const Grid& grid, const Result& r,
                             const std::vector<std::uint8_t>* truth_states = nullptr, StagedFiles* into = nullptr);
+
+// scene.png: the occupied segments as shaded voxels seen obliquely from above, one colour per
+// segment, with a scale bar and a legend of the largest segments (render_scene.hpp).
+void write_scene_png(const std::string& path, const std::string& title, const Grid& grid, const Result& r,
+                     StagedFiles* into = nullptr);
 
 }  // namespace occseg::cli
