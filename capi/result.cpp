@@ -33,6 +33,9 @@ void run_segment(occseg_result** out, occseg::Context* context, const occseg_map
   auto r = std::make_unique<occseg_result>();
   r->result = context ? occseg::segment(*context, map->grid, p) : occseg::segment(map->grid, p);
   r->preset = occseg::preset_name(p.preset);
+  r->voxel_size = map->grid.voxel_size;
+  r->origin = map->grid.origin;
+  r->nrrd_space = map->nrrd_space;
   *out = r.release();
 }
 

@@ -88,7 +88,10 @@ int run(const SegmentArgs& o) {
     });
   }
   files.emplace_back("segments.json", [&](const std::string& f, StagedFiles& s) {
-    write_file_atomically(f, [&](std::ostream& os) { write_segments_json(os, r, preset); }, &s);
+    // With the map's frame and each segment's oriented box, in metres (occseg/boxes.hpp).
+    const std::vector<OrientedBox> boxes = oriented_boxes(r, grid.voxel_size, grid.origin);
+    write_file_atomically(
+        f, [&](std::ostream& os) { write_segments_json(os, r, preset, {grid.voxel_size, grid.origin, &boxes}); }, &s);
   });
   files.emplace_back("segmentation.png", [&](const std::string& f, StagedFiles& s) {
     const Dims& d = grid.dims;

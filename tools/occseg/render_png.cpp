@@ -9,6 +9,7 @@
 
 #include "occseg/error.hpp"
 #include "occseg/file_write.hpp"
+#include "occseg/segment_colours.hpp"
 
 namespace occseg::render {
 
@@ -90,18 +91,15 @@ std::string slice_caption(const Slice& s) {
 
 }  // namespace
 
+// Both from occseg/segment_colours.hpp, which every output that shows segments uses.
 Rgb state_colour(std::uint8_t state) {
-  switch (state) {
-    case 0: return {150, 200, 255};  // free: light blue
-    case 1: return {245, 245, 245};  // unknown: white, as in the paper's figures
-    default: return {235, 120, 40};  // occupied: orange
-  }
+  const SegmentColour c = state_colour_of(state);
+  return {c.r, c.g, c.b};
 }
 
 Rgb occupied_colour(std::uint32_t label) {
-  static const Rgb hues[8] = {{235, 120, 40}, {200, 40, 40}, {150, 90, 30}, {220, 60, 160},
-                              {230, 185, 30}, {140, 50, 150}, {90, 150, 50}, {250, 100, 100}};
-  return hues[(label * 2654435761u >> 16) % 8];
+  const SegmentColour c = segment_colour(label);
+  return {c.r, c.g, c.b};
 }
 
 Image::Image(int w, int h, Rgb fill) : width(w), height(h), rgb(std::size_t(w) * h * 3) {

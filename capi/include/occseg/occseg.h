@@ -461,6 +461,30 @@ OCCSEG_API int occseg_param_default(uint32_t index, char *buf, size_t size, size
 OCCSEG_API int occseg_map_read_options(occseg_map **out, const char *path, const char *const *options);
 OCCSEG_API int occseg_map_write_options(const occseg_map *map, const char *path, const char *const *options);
 
+/* ========================================================================================== */
+/*  Oriented boxes of segments (boxes to plan with)                                           */
+/* ========================================================================================== */
+
+/* A box in the map's world frame, in metres: a point at local coordinates q (within
+ * +-extents / 2 on each axis) lies at center + R q, R the rotation of `quaternion`. */
+typedef struct {
+  uint32_t struct_size;   /* set by the caller to sizeof(occseg_box) */
+  double center[3];       /* metres, world frame (the map's origin and voxel size applied) */
+  double extents[3];      /* full edge lengths in metres along the box's axes */
+  double quaternion[4];   /* w, x, y, z: unit rotation from the map's axes to the box's, w >= 0 */
+} occseg_box;
+
+/* Fills `*out` with the oriented bounding box of segment `index` (0 .. count - 1; OCCSEG_ERANGE
+ * beyond). out->struct_size must be sizeof(occseg_box) of a version of this header
+ * (OCCSEG_EINVAL otherwise). Occupied segments: the smallest box (by volume) holding every voxel
+ * whole, among the map's axes, the principal axes of the voxel centres and the minimum-area turn
+ * about z; ties keep the map's axes, so an axis-aligned object gets the identity rotation and
+ * exactly its voxel box. Free and unknown segments: their axis-aligned voxel box. The boxes of
+ * all segments are computed on the first call (one pass over the labels; OCCSEG_ENOMEM when the
+ * occupied voxels' list does not fit) and kept in the result; they depend on the labels only,
+ * never on the thread count. Safe to call from several threads at once. */
+OCCSEG_API int occseg_result_segment_box(const occseg_result *result, uint32_t index, occseg_box *out);
+
 #ifdef __cplusplus
 } /* extern "C" */
 #endif
