@@ -35,6 +35,17 @@ class SegmentInfo(ctypes.Structure):
     ]
 
 
+class BoxInfo(ctypes.Structure):
+    """occseg_box (occseg.h); struct_size must be set to ctypes.sizeof(BoxInfo)."""
+
+    _fields_ = [
+        ("struct_size", ctypes.c_uint32),
+        ("center", c_double3),
+        ("extents", c_double3),
+        ("quaternion", ctypes.c_double * 4),
+    ]
+
+
 # int (*occseg_progress_fn)(const char *stage, double fraction, void *user)
 PROGRESS_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_char_p, ctypes.c_double, ctypes.c_void_p)
 
@@ -113,6 +124,7 @@ OPTIONAL_PROTOTYPES = {
     "occseg_param_default": (_I, [_U32, ctypes.c_char_p, ctypes.c_size_t, ctypes.POINTER(ctypes.c_size_t)]),
     "occseg_map_read_options": (_I, [ctypes.POINTER(_P), _S, ctypes.POINTER(_S)]),
     "occseg_map_write_options": (_I, [_P, _S, ctypes.POINTER(_S)]),
+    "occseg_result_segment_box": (_I, [_P, ctypes.c_uint32, ctypes.POINTER(BoxInfo)]),
 }
 
 

@@ -1,10 +1,13 @@
 // `occseg segment IN --out DIR`: segment a map (.npy .nrrd .pcd .graph .bt .ot, see map_input)
 // and write labels.npy, labels.nrrd, segments.json and segmentation.png, plus map.nrrd for inputs
 // that were not grids, segments.pcd for point clouds and segmentation.pgm + segmentation.yaml (a
-// map_server map) for 2D maps (nz = 1); then a summary on stdout (text or --json). All outputs or
+// map_server map) for 2D maps (nz = 1) and segments.ot (a ColorOcTree) for OctoMap inputs;
+// segments.ply on request; then a summary on stdout (text or --json). All outputs or
 // none (OutputSet): until every file is complete the old files of DIR stay as they were; a
 // failure, out of memory or Ctrl-C removes the new files' temporaries.
+#include <array>
 #include <chrono>
+#include <cstdio>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -19,6 +22,7 @@
 #include "occseg/nrrd.hpp"
 #include "occseg/segment.hpp"
 #include "occseg/segments_json.hpp"
+#include "occseg/voxel_mesh.hpp"
 #include "map_input.hpp"
 #include "options.hpp"
 #include "outputs.hpp"
@@ -38,6 +42,13 @@ struct SegmentArgs {
 
 double since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+// Outputs written only on request. Issue 27's --outputs LIST decides which; until it is merged
+// none is requested, and the on-request writers below are only reached through it.
+bool requested(const std::string& name) {
+  (void)name;
+  return false;
 }
 
 std::string base_name(const std::string& path) {
@@ -93,6 +104,20 @@ int run(const SegmentArgs& o) {
     write_file_atomically(
         f, [&](std::ostream& os) { write_segments_json(os, r, preset, {grid.voxel_size, grid.origin, &boxes}); }, &s);
   });
+  // segments.ot (an OctoMap ColorOcTree coloured by segment, for octovis and RViz): default for
+  // OctoMap inputs (.bt/.ot/.graph), on request (--outputs) for any other input.
+  std::array<double, 3> ot_shift{0, 0, 0};
+  bool ot_snapped = false;
+  if (have_octomap() && (is_octomap_input(o.input) || requested("segments.ot")))
+    files.emplace_back("segments.ot", [&](const std::string& f, StagedFiles& s) {
+      ot_snapped = write_octree_output(f, grid, r, &s, &ot_shift);
+    });
+  // segments.ply (the occupied segments' surfaces, binary PLY, colour per vertex, segment per
+  // face, metres): on request (--outputs).
+  if (requested("segments.ply"))
+    files.emplace_back("segments.ply", [&](const std::string& f, StagedFiles& s) {
+      write_segments_ply(f, r, grid.voxel_size, grid.origin, &s);
+    });
   files.emplace_back("segmentation.png", [&](const std::string& f, StagedFiles& s) {
     const Dims& d = grid.dims;
     write_segmentation_png(f,
@@ -129,6 +154,14 @@ int run(const SegmentArgs& o) {
   set_activity("putting the output files in place");
   out.commit();
   bar.clear();
+  if (ot_snapped && !o.report.quiet) {
+    char note[256];
+    std::snprintf(note, sizeof note,
+                  "occseg: note: segments.ot: the map's origin is not a whole number of %g m voxels from the world "
+                  "origin, as OctoMap's lattice needs; the tree is moved by (%g, %g, %g) m\n",
+                  grid.voxel_size, ot_shift[0], ot_shift[1], ot_shift[2]);
+    std::cerr << note;
+  }
   std::cout << text;
   return kOk;
 }
