@@ -125,6 +125,7 @@ OPTIONAL_PROTOTYPES = {
     "occseg_map_read_options": (_I, [ctypes.POINTER(_P), _S, ctypes.POINTER(_S)]),
     "occseg_map_write_options": (_I, [_P, _S, ctypes.POINTER(_S)]),
     "occseg_result_segment_box": (_I, [_P, ctypes.c_uint32, ctypes.POINTER(BoxInfo)]),
+    "occseg_result_write_outputs": (_I, [_P, _S, ctypes.POINTER(_S)]),
 }
 
 

@@ -122,12 +122,38 @@ class Result(Owned):
         """The state (State value) of each voxel, uint8, the shape of labels."""
         return self._call(self._copy_out, lib.occseg_result_states, np.uint8)
 
-    def write(self, directory):
-        """Writes labels.npy and segments.json into `directory`, the same files as
-        `occseg segment --out directory`; all or nothing. A path holding a NUL character raises
-        OccsegValueError (C would see only the text before it)."""
+    # What write() writes: the files of `occseg segment` that liboccseg itself can write (the
+    # pictures and segments.ot need libpng and OctoMap, which only the command links).
+    LIBRARY_OUTPUTS = ("labels.npy", "labels.nrrd", "segments.json", "segments.ply")
+    MAP2D_OUTPUTS = ("segmentation.pgm", "segmentation.yaml")
+
+    def write(self, directory, outputs=None):
+        """Writes the command's output files into `directory`, all or nothing (on an error every
+        file there stays as it was; occseg_result_write_outputs). `outputs`: None for labels.npy,
+        labels.nrrd (with the map's voxel size and origin), segments.json (with the map's frame
+        and the oriented boxes) and, for a 2D map, segmentation.pgm + segmentation.yaml; "all" for
+        those and segments.ply; or a list of file names. With a library older than
+        occseg_result_write_outputs, only None works and writes labels.npy + segments.json. A path
+        holding a NUL character raises OccsegValueError (C would see only the text before it)."""
         d = path_bytes("occseg.Result.write", "directory", directory)
-        self._call(lambda h: check(lib.occseg_result_write(h, d)))
+        if outputs is None:
+            names = ["labels.npy", "labels.nrrd", "segments.json"]
+        elif isinstance(outputs, str) and outputs == "all":
+            names = list(self.LIBRARY_OUTPUTS)
+        elif isinstance(outputs, str):
+            raise OccsegError(Status.EINVAL, f"occseg.Result.write: outputs {outputs!r} is not 'all' or a list of names")
+        else:
+            names = [path_bytes("occseg.Result.write", "outputs", n).decode() for n in outputs]
+        if (outputs is None or outputs == "all") and self.dims[2] == 1:
+            names += list(self.MAP2D_OUTPUTS)
+        if not has("occseg_result_write_outputs"):
+            if outputs is not None:
+                raise OccsegError(Status.EUNSUPPORTED, "occseg.Result.write: outputs= needs a liboccseg with "
+                                                       "occseg_result_write_outputs")
+            self._call(lambda h: check(lib.occseg_result_write(h, d)))
+            return
+        arr = (ctypes.c_char_p * (len(names) + 1))(*[n.encode() for n in names], None)
+        self._call(lambda h: check(lib.occseg_result_write_outputs(h, d, arr)))
 
     def boxes(self):
         """The oriented bounding box (Box) of every segment, index == id (occseg_result_segment_box):

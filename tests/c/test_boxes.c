@@ -1,5 +1,11 @@
-/* occseg_result_segment_box: oriented boxes in metres on the suite's scene, and the error paths. */
+/* occseg_result_segment_box: oriented boxes in metres on the suite's scene, and the error paths;
+ * occseg_result_write_outputs: the command's files by name. */
+#define _POSIX_C_SOURCE 200809L
 #include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "suite.h"
 
@@ -72,10 +78,51 @@ static void box_errors(void **state) {
   occseg_result_free(r);
 }
 
+static int exists(const char *path) {
+  struct stat st;
+  return stat(path, &st) == 0;
+}
+
+static void write_outputs_by_name(void **state) {
+  occseg_result *r = moved_scene_result();
+  const char *all[] = {"labels.npy", "labels.nrrd", "segments.json", "segments.ply", NULL};
+  const char *png[] = {"segments.json", "segmentation.png", NULL};
+  const char *bogus[] = {"labels.nrrd", "passwords.txt", NULL};
+  const char *twice[] = {"labels.nrrd", "labels.nrrd", NULL};
+  const char *flat[] = {"segmentation.pgm", NULL};
+  FILE *f;
+  char head[64] = {0};
+  (void)state;
+  (void)!system("rm -rf c_outputs");
+  /* Refused before anything is written: no directory is created. */
+  EXPECT_FAIL(occseg_result_write_outputs(r, "c_outputs", png), OCCSEG_EUNSUPPORTED,
+              "'segmentation.png' is written by the occseg command only");
+  EXPECT_FAIL(occseg_result_write_outputs(r, "c_outputs", bogus), OCCSEG_EINVAL, "'passwords.txt' is not an output file");
+  EXPECT_FAIL(occseg_result_write_outputs(r, "c_outputs", twice), OCCSEG_EINVAL, "'labels.nrrd' is named twice");
+  EXPECT_FAIL(occseg_result_write_outputs(r, "c_outputs", flat), OCCSEG_EINVAL, "2D maps (nz = 1) only");
+  EXPECT_FAIL(occseg_result_write_outputs(NULL, "c_outputs", NULL), OCCSEG_EINVAL, "'result'");
+  EXPECT_FAIL(occseg_result_write_outputs(r, NULL, NULL), OCCSEG_EINVAL, "'dir'");
+  assert_false(exists("c_outputs"));
+  /* The default set of a 3D map. */
+  assert_int_equal(occseg_result_write_outputs(r, "c_outputs", NULL), OCCSEG_OK);
+  assert_true(exists("c_outputs/labels.nrrd") && exists("c_outputs/segments.json"));
+  assert_false(exists("c_outputs/labels.npy") || exists("c_outputs/segmentation.pgm"));
+  /* By name: PLY and the NRRD with the map's origin (1, 2, 3) m. */
+  assert_int_equal(occseg_result_write_outputs(r, "c_outputs", all), OCCSEG_OK);
+  assert_true(exists("c_outputs/labels.npy") && exists("c_outputs/segments.ply"));
+  f = fopen("c_outputs/segments.ply", "rb");
+  assert_non_null(f);
+  assert_int_equal(fread(head, 1, 35, f), 35);
+  fclose(f);
+  assert_string_equal(head, "ply\nformat binary_little_endian 1.0");
+  occseg_result_free(r);
+}
+
 int run_boxes_tests(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(boxes_of_the_scene),
       cmocka_unit_test(box_errors),
+      cmocka_unit_test(write_outputs_by_name),
   };
   return cmocka_run_group_tests_name("boxes", tests, NULL, NULL);
 }

@@ -485,6 +485,24 @@ typedef struct {
  * never on the thread count. Safe to call from several threads at once. */
 OCCSEG_API int occseg_result_segment_box(const occseg_result *result, uint32_t index, occseg_box *out);
 
+/* ========================================================================================== */
+/*  Writing the command's output files                                                        */
+/* ========================================================================================== */
+
+/* Writes into `dir` the output files of `occseg segment --out dir` named in `names` (a
+ * NULL-terminated array of file names), as the command writes them: "labels.npy",
+ * "labels.nrrd" (uint32 labels with the map's voxel size and origin, in the named space of a map
+ * read from a .nrrd file), "segments.json" (with the map's frame and the oriented boxes),
+ * "segments.ply" (the occupied segments' surfaces), and for 2D maps (nz = 1)
+ * "segmentation.pgm" and "segmentation.yaml" (a map_server map). NULL `names`: the command's
+ * default set that the library can write: labels.nrrd, segments.json and, for a 2D map, the PGM
+ * and YAML pair. The pictures, segments.ot and the point clouds need libraries liboccseg does
+ * not link (libpng, OctoMap, PCL) or the input itself: naming one fails with OCCSEG_EUNSUPPORTED;
+ * any other name, a name given twice, or a 2D file for a 3D map fails with OCCSEG_EINVAL naming
+ * it, before anything is written. All or nothing, exactly as occseg_result_write (creates `dir`,
+ * not its parents; on failure every file in `dir` is as it was). */
+OCCSEG_API int occseg_result_write_outputs(const occseg_result *result, const char *dir, const char *const *names);
+
 #ifdef __cplusplus
 } /* extern "C" */
 #endif
