@@ -56,22 +56,22 @@ ReadMesh parse(const std::string& path) {
         [] {});
   });
   ply::ply_parser::scalar_property_definition_callbacks_type scalars;
-  ply::at<ply::float32>(scalars) = [&](const std::string& e, const std::string& prop) -> std::function<void(float)> {
+  ply::ply_parser::at<ply::float32>(scalars) = [&](const std::string& e, const std::string& prop) -> std::function<void(float)> {
     if (e != "vertex") return {};
     const int k = prop == "x" ? 0 : prop == "y" ? 1 : 2;
     return [&, k](float v) { m.xyz.back()[k] = v; };
   };
-  ply::at<ply::uint8>(scalars) = [&](const std::string&, const std::string& prop) -> std::function<void(std::uint8_t)> {
+  ply::ply_parser::at<ply::uint8>(scalars) = [&](const std::string&, const std::string& prop) -> std::function<void(std::uint8_t)> {
     const int k = prop == "red" ? 0 : prop == "green" ? 1 : 2;
     return [&, k](std::uint8_t v) { m.rgb.back()[k] = v; };
   };
-  ply::at<ply::uint32>(scalars) = [&](const std::string& e, const std::string& prop) -> std::function<void(std::uint32_t)> {
+  ply::ply_parser::at<ply::uint32>(scalars) = [&](const std::string& e, const std::string& prop) -> std::function<void(std::uint32_t)> {
     if (e != "face" || prop != "segment") return {};
     return [&](std::uint32_t v) { m.segment.back() = v; };
   };
   p.scalar_property_definition_callbacks(scalars);
   ply::ply_parser::list_property_definition_callbacks_type lists;
-  ply::at<ply::uint8, ply::int32>(lists) = [&](const std::string&, const std::string&) {
+  ply::ply_parser::at<ply::uint8, ply::int32>(lists) = [&](const std::string&, const std::string&) {
     return std::make_tuple(std::function<void(std::uint8_t)>([](std::uint8_t) {}),
                            std::function<void(std::int32_t)>([&](std::int32_t v) { m.faces.back().push_back(v); }),
                            std::function<void()>([] {}));
@@ -113,7 +113,9 @@ ReadMesh write_and_read(const Result& r, double v, std::array<double, 3> origin,
     const SegmentColour c = segment_colour(s);
     for (const std::int32_t i : m.faces[f]) {
       EXPECT_TRUE(i >= 0 && std::size_t(i) < m.xyz.size());
-      if (i >= 0 && std::size_t(i) < m.rgb.size()) EXPECT_EQ(m.rgb[i], (std::array<int, 3>{c.r, c.g, c.b}));
+      if (i >= 0 && std::size_t(i) < m.rgb.size()) {
+        EXPECT_EQ(m.rgb[i], (std::array<int, 3>{c.r, c.g, c.b}));
+      }
     }
   }
   pcl::PolygonMesh mesh;

@@ -78,6 +78,7 @@ int run(const SegmentArgs& o) {
   t = std::chrono::steady_clock::now();
   const std::string preset = preset_name(params.preset);
   std::vector<std::pair<std::string, std::function<void(const std::string&, StagedFiles&)>>> files;
+  files.reserve(16);  // every output this command has; also spares GCC 12 a false -Warray-bounds
   files.emplace_back("labels.npy",
                      [&](const std::string& f, StagedFiles& s) { write_labels_npy(f, r.dims, r.labels, &s); });
   // In the input's space (an LPS volume's labels in LPS, lying on it in 3D Slicer).
