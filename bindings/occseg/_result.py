@@ -177,7 +177,8 @@ class Result(Owned):
 
     def box(self, segment_id):
         """The Box of one segment (see boxes())."""
-        return self.boxes()[self._checked("box", segment_id).id]
+        s = self._checked("box", segment_id)  # first: a bad id computes nothing
+        return self.boxes()[s.id]
 
     def to_open3d(self, kind="points", states=(State.OCCUPIED,)):
         """The segmentation as an Open3D geometry coloured by segment (the command's colours):
