@@ -1,11 +1,12 @@
-// segments.ply (voxel_mesh.hpp). The PLY is written here rather than through a library: PCL's
-// writer (pcl::io::savePLYFileBinary for a PolygonMesh) writes faces as vertex indices only,
-// VTK's vtkPLYWriter only colours, normals and texture coordinates, and VTK's low-level vtkPLY
-// (Greg Turk's library, which can describe any property) keeps one process-wide heap that each
-// ply_close frees (and deletes the stream it was handed), so two threads writing at once would
-// free each other's memory; tinyply and
-// happly are not in Debian 12. The format itself is a text header and fixed little-endian
-// records; the tests read the files back with PCL's PLY reader.
+// segments.ply (voxel_mesh.hpp). The PLY is written here rather than through a library, as none
+// in Debian 12 writes a per-face property: PCL's savePLYFileBinary takes a pcl::PolygonMesh,
+// whose faces are vertex index lists only; VTK's vtkPLYWriter writes point and cell colours,
+// normals and texture coordinates, no other arrays; VTK's low-level vtkPLY (Greg Turk's library,
+// which can describe any property) allocates from one process-wide heap that every ply_close
+// frees (and deletes the stream it was handed), so two threads writing at once would free each
+// other's memory; assimp's faces (aiFace) hold vertex indices only; tinyply and happly are not
+// packaged. The format itself is a text header and fixed little-endian records; the tests read
+// the files back with PCL's PLY readers.
 #include "occseg/voxel_mesh.hpp"
 
 #include <cstring>
