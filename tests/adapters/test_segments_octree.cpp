@@ -4,11 +4,13 @@
 
 #include <octomap/AbstractOcTree.h>
 
+#include <cmath>
 #include <filesystem>
 #include <map>
 #include <memory>
 
 #include "occseg/error.hpp"
+#include "occseg/octomap_file.hpp"
 #include "occseg/octomap_segments.hpp"
 #include "occseg/octomap_tree.hpp"
 #include "occseg/segment.hpp"
@@ -154,4 +156,42 @@ TEST(SegmentsOctree, MapBeyondOctomapKeysIsBadValue) {
     EXPECT_NE(std::string(e.what()).find("2^16 keys of OctoMap"), std::string::npos) << e.what();
   }
   EXPECT_FALSE(fs::exists(path));
+}
+
+// The OctoMap corridor (../shared/data/geb079.bt, 8 cm): segments.ot at the tree's own resolution
+// puts every occupied voxel on the key of the source tree's leaf it came from.
+TEST(SegmentsOctree, RealCorridorLandsOnTheSourceTreesKeys) {
+  const std::string bt = std::string(OCCSEG_SHARED_DATA) + "/geb079.bt";
+  if (!fs::exists(bt)) GTEST_SKIP() << "no " << bt;
+  OctreeOptions o;
+  o.bbox = Box{{-4.0, -3.52, -0.32}, {4.0, 3.44, 2.8}};
+  const Grid g = read_octree_file(bt, o);
+  const Result r = segment(g, Params::defaults());
+  const std::string path = tmp("corridor.ot");
+  const OctreePlacement place = write_segments_octree(path, g, r);
+  EXPECT_FALSE(place.snapped);
+  const auto tree = read_back(path);
+  ASSERT_TRUE(tree);
+  expect_tree_is_segmentation(*tree, g, r, {0, 0, 0});
+  octomap::OcTree source(0.1);
+  ASSERT_TRUE(source.readBinary(bt));
+  ASSERT_EQ(source.getResolution(), tree->getResolution());
+  // Each leaf sits on the source tree's key of the map voxel it came from: the source's value
+  // there (unknown: 0.5) is that voxel's probability, float for float.
+  std::size_t leaves = 0, agree = 0, occupied_in_source = 0;
+  for (auto it = tree->begin_leafs(), end = tree->end_leafs(); it != end; ++it, ++leaves) {
+    const octomap::OcTreeKey k = it.getKey();
+    std::size_t c[3];
+    for (int a = 0; a < 3; ++a)
+      c[a] = static_cast<std::size_t>(std::floor((tree->keyToCoord(k[a]) - g.origin[a]) / g.voxel_size));
+    const float p = g.at(c[0], c[1], c[2]);
+    const octomap::OcTreeNode* n = source.search(k);
+    const float want = n ? static_cast<float>(1.0 / (1.0 + std::exp(-double(n->getLogOdds())))) : 0.5f;
+    agree += p == want;
+    occupied_in_source += n && source.isNodeOccupied(n);
+  }
+  EXPECT_GT(leaves, 1000u);
+  EXPECT_EQ(agree, leaves);
+  // Most segment voxels are occupied in the tree; the rest are gaps the default preset closes.
+  EXPECT_GT(occupied_in_source, leaves * 9 / 10);
 }
