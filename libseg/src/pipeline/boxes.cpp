@@ -60,27 +60,27 @@ Mat3 canonical(Mat3 m) {
   return m;
 }
 
-// Principal axes of the points, largest variance first. The covariance is computed exactly from
-// integer sums (128-bit), so it does not depend on the order of the points.
+// Principal axes of the points, largest variance first. The sums are exact integers (128-bit,
+// of the offsets from the segment's first voxel: |offset| < 2^41, so n * offset^2 < 2^122 never
+// overflows), so they do not depend on the order of the points; the covariance is then formed
+// from them in long double.
 Mat3 principal_axes(const std::vector<Point>& pts, std::size_t begin, std::size_t end) {
   __int128 s[3] = {0, 0, 0}, ss[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+  const Point& o = pts[begin];
   for (std::size_t i = begin; i < end; ++i) {
-    const std::int64_t v[3] = {pts[i].x, pts[i].y, pts[i].z};
+    const std::int64_t v[3] = {pts[i].x - o.x, pts[i].y - o.y, pts[i].z - o.z};
     for (int a = 0; a < 3; ++a) {
       s[a] += v[a];
       for (int b = a; b < 3; ++b) ss[a][b] += __int128(v[a]) * v[b];
     }
   }
-  const __int128 n = __int128(end - begin);
+  const long double n = static_cast<long double>(end - begin);
+  long double mean[3];
+  for (int a = 0; a < 3; ++a) mean[a] = static_cast<long double>(s[a]) / n;
   Mat3 c;
   for (int a = 0; a < 3; ++a)
-    for (int b = a; b < 3; ++b) {
-      // n * S_ab - S_a * S_b is n^2 times the covariance, exact while it fits 128 bits (any map
-      // whose segments span fewer than about 2^21 voxels per axis; beyond, the double below
-      // is still the same for any order of the points).
-      const double v = double(n * ss[a][b] - s[a] * s[b]) / (double(n) * double(n));
-      c(a, b) = c(b, a) = v;
-    }
+    for (int b = a; b < 3; ++b)
+      c(a, b) = c(b, a) = static_cast<double>(static_cast<long double>(ss[a][b]) / n - mean[a] * mean[b]);
   Eigen::SelfAdjointEigenSolver<Mat3> eig(c);
   Mat3 v = eig.eigenvectors();  // ascending eigenvalues: reverse to largest first
   Mat3 m;
