@@ -3,12 +3,15 @@
 #pragma once
 #include <array>
 #include <cstring>
+#include <mutex>
+#include <vector>
 #include <exception>
 #include <new>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
 
+#include "occseg/boxes.hpp"
 #include "occseg/context.hpp"
 #include "occseg/error.hpp"
 #include "occseg/grid.hpp"
@@ -35,9 +38,24 @@ struct occseg_context {
 struct occseg_result {
   occseg::Result result;
   std::string preset;  // for segments.json
-  // The geometry of the map it was computed on, when it was computed (occseg_result_point_labels).
-  double voxel_size = 1.0;
+  // The segmented map's frame, for the boxes in metres and segments.json / labels.nrrd.
+  double voxel_size = 1;
   std::array<double, 3> origin{0, 0, 0};
+  std::string nrrd_space;
+  // The oriented boxes, computed on first use (occseg_result_segment_box, occseg_result_write):
+  // once, even when several threads read the result at once (a mutex, not std::call_once: an
+  // exception such as bad_alloc leaves it simply not computed, to be tried again).
+  const std::vector<occseg::OrientedBox>& boxes() const {
+    std::lock_guard<std::mutex> lock(boxes_mutex);
+    if (!boxes_done) {
+      boxes_cache = occseg::oriented_boxes(result, voxel_size, origin);
+      boxes_done = true;
+    }
+    return boxes_cache;
+  }
+  mutable std::mutex boxes_mutex;
+  mutable bool boxes_done = false;
+  mutable std::vector<occseg::OrientedBox> boxes_cache;
 };
 
 namespace occseg::capi {

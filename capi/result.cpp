@@ -35,6 +35,7 @@ void run_segment(occseg_result** out, occseg::Context* context, const occseg_map
   r->preset = occseg::preset_name(p.preset);
   r->voxel_size = map->grid.voxel_size;
   r->origin = map->grid.origin;
+  r->nrrd_space = map->nrrd_space;
   *out = r.release();
 }
 

@@ -41,7 +41,12 @@ int occseg_result_write(const occseg_result* result, const char* dir) {
       occseg::write_labels_npy(std::string(dir) + "/labels.npy", result->result.dims, result->result.labels, &files);
       occseg::write_file_atomically(
           std::string(dir) + "/segments.json",
-          [&](std::ostream& out) { occseg::write_segments_json(out, result->result, result->preset); }, &files);
+          [&](std::ostream& out) {
+            // With the map's frame and the boxes, as `occseg segment` writes it.
+            occseg::write_segments_json(out, result->result, result->preset,
+                                        {result->voxel_size, result->origin, &result->boxes()});
+          },
+          &files);
       files.commit();
     } catch (...) {
       if (made) ::rmdir(dir);  // ours and empty again: nothing of this call is left

@@ -26,9 +26,9 @@ void number(char*& p, const char* end, double v) {
 }
 
 template <class A>
-void triple(char*& p, const char* end, const A& a) {
+void triple(char*& p, const char* end, const A& a, int count = 3) {
   *p++ = '[';
-  for (int i = 0; i < 3; ++i) {
+  for (int i = 0; i < count; ++i) {
     if (i) {
       *p++ = ',';
       *p++ = ' ';
@@ -56,12 +56,27 @@ void json_string(std::ostream& out, const std::string& s) {
 }  // namespace
 
 void write_segments_json(std::ostream& out, const Result& r, const std::string& preset) {
+  write_segments_json(out, r, preset, SegmentsFrame{});
+}
+
+void write_segments_json(std::ostream& out, const Result& r, const std::string& preset, const SegmentsFrame& frame) {
   out << "{\n \"dims\": [" << r.dims.nx << ", " << r.dims.ny << ", " << r.dims.nz << "],\n \"preset\": ";
   json_string(out, preset);
+  const std::vector<OrientedBox>* boxes =
+      frame.boxes && frame.boxes->size() == r.segments.size() ? frame.boxes : nullptr;
+  if (boxes) {
+    char head[160];
+    char* p = head;
+    p += std::snprintf(p, sizeof head, ",\n \"voxel_size\": ");
+    number(p, head + sizeof head, frame.voxel_size);
+    p += std::snprintf(p, static_cast<std::size_t>(head + sizeof head - p), ",\n \"origin\": ");
+    triple(p, head + sizeof head, frame.origin);
+    out.write(head, p - head);
+  }
   out << ",\n \"segments\": [";
   const char* sep = "\n";
-  // One line of at most 6 numbers of <= 24 characters and a few fixed words: 512 bytes suffice.
-  char line[512];
+  // One line of at most 16 numbers of <= 24 characters and a few fixed words: 1024 bytes suffice.
+  char line[1024];
   const char* end = line + sizeof line;
   for (const Segment& s : r.segments) {
     char* p = line;
@@ -75,6 +90,16 @@ void write_segments_json(std::ostream& out, const Result& r, const std::string& 
     triple(p, end, s.bbox_max);
     p += std::snprintf(p, static_cast<std::size_t>(end - p), "}, \"centroid\": ");
     triple(p, end, s.centroid);
+    if (boxes) {
+      const OrientedBox& b = (*boxes)[static_cast<std::size_t>(&s - r.segments.data())];
+      p += std::snprintf(p, static_cast<std::size_t>(end - p), ", \"obb\": {\"center\": ");
+      triple(p, end, b.center);
+      p += std::snprintf(p, static_cast<std::size_t>(end - p), ", \"extents\": ");
+      triple(p, end, b.extents);
+      p += std::snprintf(p, static_cast<std::size_t>(end - p), ", \"quaternion\": ");
+      triple(p, end, b.quaternion, 4);
+      *p++ = '}';
+    }
     *p++ = '}';
     out.write(line, p - line);
     sep = ",\n";

@@ -49,6 +49,17 @@ class FusionOptions(ctypes.Structure):
     ]
 
 
+class BoxInfo(ctypes.Structure):
+    """occseg_box (occseg.h); struct_size must be set to ctypes.sizeof(BoxInfo)."""
+
+    _fields_ = [
+        ("struct_size", ctypes.c_uint32),
+        ("center", c_double3),
+        ("extents", c_double3),
+        ("quaternion", ctypes.c_double * 4),
+    ]
+
+
 # int (*occseg_progress_fn)(const char *stage, double fraction, void *user)
 PROGRESS_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_char_p, ctypes.c_double, ctypes.c_void_p)
 
@@ -135,6 +146,8 @@ OPTIONAL_PROTOTYPES = {
     "occseg_fusion_counts": (_I, [_P, ctypes.POINTER(ctypes.c_uint64), ctypes.POINTER(ctypes.c_uint64)]),
     "occseg_result_point_labels": (_I, [_P, _P, _P, _I, ctypes.c_size_t, ctypes.c_ssize_t, _P, _P, _P,
                                         ctypes.c_size_t]),
+    "occseg_result_segment_box": (_I, [_P, ctypes.c_uint32, ctypes.POINTER(BoxInfo)]),
+    "occseg_result_write_outputs": (_I, [_P, _S, ctypes.POINTER(_S)]),
 }
 
 

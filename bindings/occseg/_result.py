@@ -8,7 +8,38 @@ import numpy as np
 from ._args import integer, path_bytes
 from ._errors import OccsegError, Status, check
 from ._handles import Owned
-from ._lib import SegmentInfo, c_size3, lib
+from ._lib import BoxInfo, SegmentInfo, c_size3, has, lib
+
+# The colours of occupied segments, as occseg/segment_colour.hpp gives them to every output of
+# the command (pictures, segments.ot, segments.ply): hue = SEGMENT_HUES[(((id * 2654435761) mod
+# 2^32) >> 16) % 16]. tests/python/test_boxes.py checks this copy against the header.
+SEGMENT_HUES = ((235, 120, 40), (200, 40, 40), (150, 90, 30), (220, 60, 160), (230, 185, 30), (140, 50, 150),
+                (90, 150, 50), (250, 100, 100), (30, 130, 130), (50, 70, 170), (170, 170, 40), (120, 210, 110),
+                (110, 70, 220), (240, 150, 200), (130, 30, 70), (160, 220, 60))
+
+
+def segment_colour(segment_id):
+    """(r, g, b), 0..255, of an occupied segment: the same colour as in the command's outputs."""
+    return SEGMENT_HUES[(((int(segment_id) * 2654435761) & 0xFFFFFFFF) >> 16) % len(SEGMENT_HUES)]
+
+
+@dataclasses.dataclass(frozen=True)
+class Box:
+    """An oriented bounding box in the map's world frame, metres (occseg_box): `center`
+    (x, y, z), full edge lengths `extents` along the box's own axes, and `quaternion` (w, x, y, z),
+    the rotation from the map's axes to the box's (w >= 0). What a MoveIt CollisionObject's BOX
+    primitive takes: dimensions = extents, pose = center and the quaternion (as x, y, z, w)."""
+
+    center: tuple
+    extents: tuple
+    quaternion: tuple
+
+    def rotation(self):
+        """The 3 x 3 rotation matrix of `quaternion` (columns: the box's axes in the map)."""
+        w, x, y, z = self.quaternion
+        return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                         [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                         [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
 class State(enum.IntEnum):
@@ -95,12 +126,95 @@ class Result(Owned):
         """The state (State value) of each voxel, uint8, the shape of labels."""
         return self._call(self._copy_out, lib.occseg_result_states, np.uint8)
 
-    def write(self, directory):
-        """Writes labels.npy and segments.json into `directory`, the same files as
-        `occseg segment --out directory`; all or nothing. A path holding a NUL character raises
-        OccsegValueError (C would see only the text before it)."""
+    # What write() writes: the files of `occseg segment` that liboccseg itself can write (the
+    # pictures and segments.ot need libpng and OctoMap, which only the command links).
+    LIBRARY_OUTPUTS = ("labels.npy", "labels.nrrd", "segments.json", "segments.ply")
+    MAP2D_OUTPUTS = ("segmentation.pgm", "segmentation.yaml")
+
+    def write(self, directory, outputs=None):
+        """Writes the command's output files into `directory`, all or nothing (on an error every
+        file there stays as it was; occseg_result_write_outputs). `outputs`: None for labels.npy,
+        labels.nrrd (with the map's voxel size and origin), segments.json (with the map's frame
+        and the oriented boxes) and, for a 2D map, segmentation.pgm + segmentation.yaml; "all" for
+        those and segments.ply; or a list of file names. With a library older than
+        occseg_result_write_outputs, only None works and writes labels.npy + segments.json. A path
+        holding a NUL character raises OccsegValueError (C would see only the text before it)."""
         d = path_bytes("occseg.Result.write", "directory", directory)
-        self._call(lambda h: check(lib.occseg_result_write(h, d)))
+        if outputs is None:
+            names = ["labels.npy", "labels.nrrd", "segments.json"]
+        elif isinstance(outputs, str) and outputs == "all":
+            names = list(self.LIBRARY_OUTPUTS)
+        elif isinstance(outputs, str):
+            raise OccsegError(Status.EINVAL, f"occseg.Result.write: outputs {outputs!r} is not 'all' or a list of names")
+        else:
+            names = [path_bytes("occseg.Result.write", "outputs", n).decode() for n in outputs]
+        if (outputs is None or outputs == "all") and self.dims[2] == 1:
+            names += list(self.MAP2D_OUTPUTS)
+        if not has("occseg_result_write_outputs"):
+            if outputs is not None:
+                raise OccsegError(Status.EUNSUPPORTED, "occseg.Result.write: outputs= needs a liboccseg with "
+                                                       "occseg_result_write_outputs")
+            self._call(lambda h: check(lib.occseg_result_write(h, d)))
+            return
+        arr = (ctypes.c_char_p * (len(names) + 1))(*[n.encode() for n in names], None)
+        self._call(lambda h: check(lib.occseg_result_write_outputs(h, d, arr)))
+
+    def boxes(self):
+        """The oriented bounding box (Box) of every segment, index == id (occseg_result_segment_box):
+        for occupied segments the smallest box holding all their voxels among the map's axes, the
+        principal axes and the best turn about z; for free and unknown ones their axis-aligned
+        voxel box. Computed by the C library on the first call, then kept (usable after close())."""
+        if getattr(self, "_boxes", None) is None:
+            if not has("occseg_result_segment_box"):
+                raise OccsegError(Status.EUNSUPPORTED, "occseg.Result.boxes: the loaded liboccseg has no "
+                                                       "occseg_result_segment_box (too old)")
+            self._boxes = self._call(self._copy_boxes)
+        return list(self._boxes)
+
+    def _copy_boxes(self, h):
+        out = []
+        for i in range(len(self.segments)):
+            b = BoxInfo(struct_size=ctypes.sizeof(BoxInfo))
+            check(lib.occseg_result_segment_box(h, i, ctypes.byref(b)))
+            out.append(Box(tuple(b.center), tuple(b.extents), tuple(b.quaternion)))
+        return out
+
+    def box(self, segment_id):
+        """The Box of one segment (see boxes())."""
+        s = self._checked("box", segment_id)  # first: a bad id computes nothing
+        return self.boxes()[s.id]
+
+    def to_open3d(self, kind="points", states=(State.OCCUPIED,)):
+        """The segmentation as an Open3D geometry coloured by segment (the command's colours):
+        kind="points", a PointCloud of the voxel centres (metres); kind="voxels", a VoxelGrid of
+        the map's voxel size. `states`: which segments (default: the occupied ones; free and
+        unknown ones get their state's colour). Needs Open3D (Debian: apt-get install
+        python3-open3d); without it raises ImportError saying so."""
+        try:
+            import open3d
+        except ImportError as e:
+            raise ImportError("occseg.Result.to_open3d needs Open3D, which is not installed "
+                              "(Debian: apt-get install python3-open3d; elsewhere: pip install open3d); "
+                              f"importing it failed: {e}") from e
+        if kind not in ("points", "voxels"):
+            raise OccsegError(Status.EINVAL, f"occseg.Result.to_open3d: kind {kind!r} is not 'points' or 'voxels'")
+        wanted = {State(s) for s in states}
+        pts, cols = [], []
+        state_rgb = {State.FREE: (150, 200, 255), State.UNKNOWN: (245, 245, 245)}
+        for s in self.segments:
+            if s.state not in wanted:
+                continue
+            p = self.points(s.id)
+            rgb = segment_colour(s.id) if s.state == State.OCCUPIED else state_rgb[s.state]
+            pts.append(p)
+            cols.append(np.tile(np.asarray(rgb, dtype=np.float64) / 255.0, (len(p), 1)))
+        pcd = open3d.geometry.PointCloud()
+        if pts:
+            pcd.points = open3d.utility.Vector3dVector(np.concatenate(pts))
+            pcd.colors = open3d.utility.Vector3dVector(np.concatenate(cols))
+        if kind == "points":
+            return pcd
+        return open3d.geometry.VoxelGrid.create_from_point_cloud(pcd, voxel_size=self.voxel_size)
 
     def _checked(self, who, segment_id):
         """The Segment of an id: an int (not a bool, not a float), in range."""

@@ -41,14 +41,22 @@ def read_pcd_xyzl(path):
     return rec
 
 
-def check(name, args, cloud=False, grid=False):
+def check(name, args, cloud=False, grid=False, octomap=False):
     out = os.path.join(work, name)
     r = run("segment", *args, "--out", out)
     assert r.returncode == 0, (name, r.stderr)
     files = sorted(os.listdir(out))
     want = ["labels.npy", "labels.nrrd", "scene.png", "segmentation.png", "segments.json"] + ([] if grid else ["map.nrrd"]) + (
-        ["segments.pcd"] if cloud else []) + (["points.labels.npy", "points.pcd"] if name.startswith("pcd") else [])
+        ["segments.pcd"] if cloud else []) + (["points.labels.npy", "points.pcd"] if name.startswith("pcd") else []) + (
+        ["segments.ot"] if octomap else [])
     assert files == sorted(want), (name, files)
+    if octomap:  # a ColorOcTree at the map's voxel size (its leaves: tests/adapters/test_segments_octree.cpp)
+        head = open(os.path.join(out, "segments.ot"), "rb").read(200).split(b"\ndata\n")[0].decode()
+        assert head.startswith("# Octomap OcTree file") and "\nid ColorOcTree\n" in head, head
+        res = float(re.search(r"\nres (\S+)", head).group(1))
+        vs_json = json.load(open(os.path.join(out, "segments.json")))["voxel_size"]
+        assert res == vs_json, (res, vs_json)
+    check.stderr = r.stderr
     labels = np.load(os.path.join(out, "labels.npy"))
     lab_nrrd, vs, origin = read_nrrd(os.path.join(out, "labels.nrrd"))
     assert np.array_equal(labels, lab_nrrd), name
@@ -83,10 +91,16 @@ lab_nrrd, _, vs, origin = check("nrrd", [os.path.join(work, "map.nrrd")], grid=T
 assert np.array_equal(lab_npy, lab_nrrd) and vs == 0.1 and origin == [1.05, 2.05, 3.05], origin
 
 check("pcd", [os.path.join(data, "table_scene_mug_stereo_textured.pcd"), "--voxel-size", "0.03"], cloud=True)
-check("graph", [os.path.join(data, "spherical_scan.graph"), "--voxel-size", "0.1"], cloud=True)
+check("graph", [os.path.join(data, "spherical_scan.graph"), "--voxel-size", "0.1"], cloud=True, octomap=True)
 labels, doc, vs, origin = check("bt", [os.path.join(data, "geb079.bt"), "--voxel-size", "0.16",
-                                       "--bbox", "-8", "-7.52", "-0.32", "8", "7.44", "2.8"])
+                                       "--bbox", "-8", "-7.52", "-0.32", "8", "7.44", "2.8"], octomap=True)
 assert abs(vs - 0.16) < 1e-12 and labels.shape == (20, 94, 100), labels.shape
+assert "note:" not in check.stderr, check.stderr  # the box is on the 0.16 m lattice
+# A box starting at y = -7.44 m: 46.5 voxels of 0.16 m, off OctoMap's lattice: segments.ot moves.
+check("bt_off_lattice", [os.path.join(data, "geb079.bt"), "--voxel-size", "0.16",
+                         "--bbox", "-8", "-7.44", "-0.32", "8", "7.44", "2.8"], octomap=True)
+assert "segments.ot: the map's origin is not a whole number of 0.16 m voxels" in check.stderr, check.stderr
+assert "moved by (0, -0.08, 0) m" in check.stderr, check.stderr
 
 # Options a format cannot use, unknown extensions, missing files: exit codes and messages.
 r = run("segment", os.path.join(work, "map.npy"), "--sensor-origin", "0", "0", "0", "--out", os.path.join(work, "x"))

@@ -8,7 +8,8 @@ endif()
 foreach(f include/occseg/occseg.h include/occseg/occseg_version.h
           ${LIBDIR}/liboccseg.so ${LIBDIR}/liboccseg.so.0 ${LIBDIR}/pkgconfig/occseg.pc
           ${LIBDIR}/cmake/occseg/occsegConfig.cmake ${LIBDIR}/cmake/occseg/occsegConfigVersion.cmake
-          ${LIBDIR}/cmake/occseg/occsegTargets.cmake)
+          ${LIBDIR}/cmake/occseg/occsegTargets.cmake
+          share/doc/occseg/README.md share/doc/occseg/docs/cli.md share/doc/occseg/docs/c-api.md)
   if(NOT EXISTS ${PREFIX}/${f})
     message(FATAL_ERROR "installed tree lacks ${f}")
   endif()

@@ -32,5 +32,6 @@ int run_segment_tests(void);
 int run_result_tests(void);
 int run_context_tests(void);
 int run_reader_options_tests(void);
+int run_boxes_tests(void);
 
 #endif

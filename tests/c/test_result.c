@@ -131,7 +131,10 @@ static void write_files(void **state) {
   assert_non_null(strstr(json, "\"dims\": [56, 48, 40]"));
   assert_non_null(strstr(json, "\"preset\": \"default\""));
   assert_non_null(strstr(json, "{\"id\": 1, \"state\": \"occupied\", \"voxels\": 1000,"));
-  assert_non_null(strstr(json, "\"bbox\": {\"min\": [30, 25, 20], \"max\": [49, 39, 34]}, \"centroid\": [39.5, 32, 27]}"));
+  assert_non_null(strstr(json, "\"bbox\": {\"min\": [30, 25, 20], \"max\": [49, 39, 34]}, \"centroid\": [39.5, 32, 27], "));
+  /* The map's frame and the segment's oriented box, in metres (voxels of 0.1 m). */
+  assert_non_null(strstr(json, "\"voxel_size\": 0.1,\n \"origin\": [0, 0, 0]"));
+  assert_non_null(strstr(json, "\"obb\": {\"center\": [4, 3.25, 2.75], \"extents\": [2, 1.5, 1.5], \"quaternion\": [1, 0, 0, 0]}}"));
   free(json);
   /* A directory whose parent is missing: an error naming it, and no file left behind. */
   EXPECT_FAIL(occseg_result_write(r, "c_suite_missing/out"), OCCSEG_EIO, "cannot create 'c_suite_missing/out'");

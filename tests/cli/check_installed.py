@@ -24,4 +24,10 @@ for name, fmt in (("geb079.bt", "OctoMap tree"), ("table_scene_mug_stereo_textur
     r = subprocess.run([tool, "info", os.path.join(data, name), "--json"], capture_output=True, text=True)
     assert r.returncode == 0, (name, r.stderr)
     assert json.loads(r.stdout)["format"].startswith(fmt), r.stdout
+# The documentation is installed, and --help names the installed folder (found beside the program).
+docs = os.path.realpath(os.path.join(prefix, "share", "doc", "occseg"))
+for f in ("README.md", "docs/cli.md", "docs/c-api.md", "docs/python.md"):
+    assert os.path.isfile(os.path.join(docs, f)), f
+r = subprocess.run([tool, "--help"], capture_output=True, text=True)
+assert r.returncode == 0 and f"Documentation: {docs}/README.md and {docs}/docs/" in r.stdout, r.stdout[-400:]
 print(f"cli installed ({prefix}): all checks passed")

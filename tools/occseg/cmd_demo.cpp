@@ -135,7 +135,9 @@ int run(const DemoArgs& o) {
       {"labels.nrrd", [&](const std::string& f, StagedFiles& s) { write_labels_nrrd(f, map, r.labels, "", &s); }},
       {"segments.json",
        [&](const std::string& f, StagedFiles& s) {
-         write_file_atomically(f, [&](std::ostream& os) { write_segments_json(os, r, preset); }, &s);
+         const std::vector<OrientedBox> boxes = oriented_boxes(r, map.voxel_size, map.origin);
+         write_file_atomically(
+             f, [&](std::ostream& os) { write_segments_json(os, r, preset, {map.voxel_size, map.origin, &boxes}); }, &s);
        }},
       {"evaluation.json",
        [&](const std::string& f, StagedFiles& staged) {

@@ -2,10 +2,13 @@
 // and write labels.npy, labels.nrrd, segments.json, segmentation.png and scene.png, plus map.nrrd for inputs
 // that were not grids, segments.pcd for point clouds and segmentation.pgm + segmentation.yaml (a
 // map_server map) for 2D maps (nz = 1), points.labels.npy and points.pcd (labels on the input
-// points) for .pcd clouds; then a summary on stdout (text or --json). All outputs or
+// points) for .pcd clouds, segments.ot (a ColorOcTree) for OctoMap inputs; segments.ply on
+// request; then a summary on stdout (text or --json). All outputs or
 // none (OutputSet): until every file is complete the old files of DIR stay as they were; a
 // failure, out of memory or Ctrl-C removes the new files' temporaries.
+#include <array>
 #include <chrono>
+#include <cstdio>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -20,6 +23,7 @@
 #include "occseg/nrrd.hpp"
 #include "occseg/segment.hpp"
 #include "occseg/segments_json.hpp"
+#include "occseg/voxel_mesh.hpp"
 #include "map_input.hpp"
 #include "options.hpp"
 #include "outputs.hpp"
@@ -39,6 +43,13 @@ struct SegmentArgs {
 
 double since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+// Outputs written only on request. Issue 27's --outputs LIST decides which; until it is merged
+// none is requested, and the on-request writers below are only reached through it.
+bool requested(const std::string& name) {
+  (void)name;
+  return false;
 }
 
 std::string base_name(const std::string& path) {
@@ -61,7 +72,7 @@ using FileList = std::vector<std::pair<std::string, Writer>>;
 // The outputs, in the order written: a name and its writer. Out of line: GCC 12 inlines the
 // vector's growth into run() and then warns wrongly (-Warray-bounds) about its empty array.
 [[gnu::noinline]] void add_file(FileList& files, const char* name, Writer write) {
-  files.emplace_back(name, std::move(write));
+  add_file(files, name, std::move(write));
 }
 
 int run(const SegmentArgs& o) {
@@ -103,12 +114,12 @@ int run(const SegmentArgs& o) {
     point_labels = input.point_labels(grid, r);
     // default (outputs-plan): uint32, one label per input point in file order ([height, width]
     // for an organized cloud), UINT32_MAX for NaN points
-    files.emplace_back("points.labels.npy", [&](const std::string& f, StagedFiles& s) {
+    add_file(files, "points.labels.npy", [&](const std::string& f, StagedFiles& s) {
       write_npy(f, "<u4", input.point_shape, point_labels.data(), point_labels.size() * sizeof(std::uint32_t), &s);
     });
   }
   if (input.write_points_pcd)  // on request (outputs-plan): the input cloud with a label field
-    files.emplace_back("points.pcd", [&](const std::string& f, StagedFiles& s) {
+    add_file(files, "points.pcd", [&](const std::string& f, StagedFiles& s) {
       input.write_points_pcd(f, point_labels, s);
     });
   std::vector<std::uint8_t> states;
@@ -121,8 +132,25 @@ int run(const SegmentArgs& o) {
     });
   }
   add_file(files, "segments.json", [&](const std::string& f, StagedFiles& s) {
-    write_file_atomically(f, [&](std::ostream& os) { write_segments_json(os, r, preset); }, &s);
+    // With the map's frame and each segment's oriented box, in metres (occseg/boxes.hpp).
+    const std::vector<OrientedBox> boxes = oriented_boxes(r, grid.voxel_size, grid.origin);
+    write_file_atomically(
+        f, [&](std::ostream& os) { write_segments_json(os, r, preset, {grid.voxel_size, grid.origin, &boxes}); }, &s);
   });
+  // segments.ot (an OctoMap ColorOcTree coloured by segment, for octovis and RViz): default for
+  // OctoMap inputs (.bt/.ot/.graph), on request (--outputs) for any other input.
+  std::array<double, 3> ot_shift{0, 0, 0};
+  bool ot_snapped = false;
+  if (have_octomap() && (is_octomap_input(o.input) || requested("segments.ot")))
+    add_file(files, "segments.ot", [&](const std::string& f, StagedFiles& s) {
+      ot_snapped = write_octree_output(f, grid, r, &s, &ot_shift);
+    });
+  // segments.ply (the occupied segments' surfaces, binary PLY, colour per vertex, segment per
+  // face, metres): on request (--outputs).
+  if (requested("segments.ply"))
+    add_file(files, "segments.ply", [&](const std::string& f, StagedFiles& s) {
+      write_segments_ply(f, r, grid.voxel_size, grid.origin, &s);
+    });
   add_file(files, "segmentation.png", [&](const std::string& f, StagedFiles& s) {
     const Dims& d = grid.dims;
     write_segmentation_png(f,
@@ -162,6 +190,14 @@ int run(const SegmentArgs& o) {
   set_activity("putting the output files in place");
   out.commit();
   bar.clear();
+  if (ot_snapped && !o.report.quiet) {
+    char note[256];
+    std::snprintf(note, sizeof note,
+                  "occseg: note: segments.ot: the map's origin is not a whole number of %g m voxels from the world "
+                  "origin, as OctoMap's lattice needs; the tree is moved by (%g, %g, %g) m\n",
+                  grid.voxel_size, ot_shift[0], ot_shift[1], ot_shift[2]);
+    std::cerr << note;
+  }
   std::cout << text;
   return kOk;
 }

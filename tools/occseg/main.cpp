@@ -6,6 +6,7 @@
 // failed write (of a file or of stdout) exit 2 naming it; the output files stay all or none.
 #include <CLI/CLI.hpp>
 #include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -13,6 +14,7 @@
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <iostream>
 #include <new>
@@ -101,8 +103,32 @@ const char* kFooter =
     "Without a subcommand, runs `occseg demo`.\n"
     "Exit codes: 0 ok, 1 usage (bad option or parameter), 2 bad input (missing, unreadable or invalid file)\n"
     "or write error (an output file or stdout), 3 internal error or out of memory, 130 interrupted by Ctrl-C\n"
-    "(143: SIGTERM); the output files are replaced all or none.\n"
-    "Documentation: docs/cli.md. Each subcommand has --help.";
+    "(143: SIGTERM); the output files are replaced all or none.\n";
+
+// The installed documentation: <prefix>/share/doc/occseg beside this program's <prefix>/bin (so a
+// moved install still finds its own), else the configured prefix's; a build tree's program
+// points at the sources' docs/.
+std::string doc_footer() {
+  std::string dir;
+  char exe[4096];
+  const ssize_t n = ::readlink("/proc/self/exe", exe, sizeof exe - 1);
+  if (n > 0) {
+    exe[n] = '\0';
+    std::string d(exe);
+    d = d.substr(0, d.find_last_of('/') + 1) + OCCSEG_DOC_DIR_FROM_BIN;
+    char real[4096];
+    if (::realpath((d + "/README.md").c_str(), real)) dir = std::string(real).substr(0, std::strlen(real) - 10);
+  }
+  if (dir.empty()) {
+    struct stat st {};
+    if (::stat(OCCSEG_DOC_DIR "/README.md", &st) == 0) dir = OCCSEG_DOC_DIR;
+  }
+  if (dir.empty())
+    return "Documentation: README.md and docs/ of the occseg sources (installed: <prefix>/share/doc/occseg).\n"
+           "Each subcommand has --help.";
+  return "Documentation: " + dir + "/README.md and " + dir + "/docs/ (the command: " + dir +
+         "/docs/cli.md).\nEach subcommand has --help.";
+}
 
 }  // namespace
 
@@ -131,7 +157,7 @@ int run(int argc, char** argv) {
   CLI::App app{"occseg: texture-based segmentation of 3D probabilistic occupancy maps", "occseg"};
   app.set_version_flag("--version", std::string("occseg ") + OCCSEG_VERSION_TEXT);
   app.require_subcommand(0, 1);
-  app.footer(kFooter);
+  app.footer(std::string(kFooter) + doc_footer());
   // Plugins first, so their parameters, stages and readers show in --help and work in every command.
   load_cli_plugins();
   std::vector<Runner> runners{add_demo(app)};

@@ -21,6 +21,7 @@
 #endif
 #ifdef OCCSEG_HAVE_OCTOMAP
 #include "occseg/octomap_file.hpp"
+#include "occseg/octomap_segments.hpp"
 #endif
 #if defined(OCCSEG_HAVE_PCL) || defined(OCCSEG_HAVE_OCTOMAP)
 #include "occseg/scan_options.hpp"
@@ -141,6 +142,34 @@ std::string npy_type(const std::string& descr) {
 }
 
 }  // namespace
+
+bool have_octomap() {
+#ifdef OCCSEG_HAVE_OCTOMAP
+  return true;
+#else
+  return false;
+#endif
+}
+
+bool is_octomap_input(const std::string& path) {
+  const std::string e = extension(path);
+  return e == ".bt" || e == ".ot" || e == ".graph";
+}
+
+bool write_octree_output(const std::string& path, const Grid& grid, const Result& result, StagedFiles* into,
+                         std::array<double, 3>* shift) {
+#ifdef OCCSEG_HAVE_OCTOMAP
+  const OctreePlacement p = write_segments_octree(path, grid, result, into);
+  if (shift) *shift = p.shift;
+  return p.snapped;
+#else
+  (void)grid;
+  (void)result;
+  (void)into;
+  (void)shift;
+  not_built(path, "OctoMap (liboccseg_octomap)");
+#endif
+}
 
 bool have_pcl() {
 #ifdef OCCSEG_HAVE_PCL

@@ -55,4 +55,13 @@ MapInput load_map(const std::string& path, const MapInputOptions& options);
 void write_cloud_output(const std::string& path, const Grid& grid, const Result& result, StagedFiles* into = nullptr);
 bool have_pcl();
 
+// segments.ot: the occupied segments as an OctoMap ColorOcTree (occseg/octomap_segments.hpp).
+// Returns true when the map's origin was off OctoMap's lattice and the tree was moved onto it,
+// with the shift (metres) in `shift`. Throws Error(unsupported) in a build without OctoMap.
+bool write_octree_output(const std::string& path, const Grid& grid, const Result& result, StagedFiles* into,
+                         std::array<double, 3>* shift);
+bool have_octomap();
+// True for the OctoMap input formats (.bt, .ot, .graph), whose default outputs include segments.ot.
+bool is_octomap_input(const std::string& path);
+
 }  // namespace occseg::cli

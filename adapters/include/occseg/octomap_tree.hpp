@@ -6,7 +6,11 @@
 #include <octomap/ScanGraph.h>
 
 #include "occseg/grid.hpp"
+#include <memory>
+
 #include "occseg/octomap_file.hpp"
+#include "occseg/octomap_segments.hpp"
+#include "occseg/result.hpp"
 #include "occseg/scan_options.hpp"
 
 namespace occseg {
@@ -23,5 +27,10 @@ Grid grid_from_octree(const octomap::OcTreeStamped& tree, const OctreeOptions& o
 // Fuses every scan of a graph into one grid: a node's points are in its sensor frame, its pose
 // maps them to the world (octomap's insertPointCloud(ScanNode) convention).
 Grid integrate_scan_graph(const octomap::ScanGraph& graph, const ScanOptions& options);
+
+// The tree write_segments_octree writes (see occseg/octomap_segments.hpp), and where it put the
+// map (`placement`, may be null).
+std::unique_ptr<octomap::ColorOcTree> segments_octree(const Grid& grid, const Result& result,
+                                                      OctreePlacement* placement = nullptr);
 
 }  // namespace occseg

@@ -1,10 +1,17 @@
 // segments.json, the segment table that `occseg segment`, `occseg demo` and occseg_result_write
 // write: {"dims": [nx, ny, nz], "preset": ..., "segments": [{"id", "state", "voxels", "mop",
-// "bbox": {"min", "max"}, "centroid"}, ...]}, one segment a line.
+// "bbox": {"min", "max"}, "centroid"}, ...]}, one segment a line. With the map's frame (the
+// overload taking a SegmentsFrame) also "voxel_size" and "origin" (metres, the outer corner of
+// voxel (0, 0, 0)) after "preset", and per segment "obb": {"center", "extents", "quaternion"}
+// (metres; quaternion w, x, y, z; occseg/boxes.hpp) after "centroid".
 #pragma once
 #include <ostream>
 #include <string>
 
+#include <array>
+#include <vector>
+
+#include "occseg/boxes.hpp"
 #include "occseg/segment.hpp"
 
 namespace occseg {
@@ -14,5 +21,13 @@ namespace occseg {
 // document is being torn down, where an exception would end the process). Numbers are printed
 // in the shortest form that reads back as the same double.
 void write_segments_json(std::ostream& out, const Result& r, const std::string& preset);
+
+// The map's frame and the segments' oriented boxes (oriented_boxes(r, voxel_size, origin)).
+struct SegmentsFrame {
+  double voxel_size = 1;
+  std::array<double, 3> origin{0, 0, 0};
+  const std::vector<OrientedBox>* boxes = nullptr;  // one per segment, or null for none
+};
+void write_segments_json(std::ostream& out, const Result& r, const std::string& preset, const SegmentsFrame& frame);
 
 }  // namespace occseg

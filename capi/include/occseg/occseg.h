@@ -571,6 +571,48 @@ OCCSEG_API int occseg_result_point_labels(const occseg_result *result, const occ
                                           occseg_dtype dtype, size_t count, ptrdiff_t stride, const double origin[3],
                                           const double orientation_wxyz[4], uint32_t *out, size_t out_count);
 
+/* ========================================================================================== */
+/*  Oriented boxes of segments (boxes to plan with)                                           */
+/* ========================================================================================== */
+
+/* A box in the map's world frame, in metres: a point at local coordinates q (within
+ * +-extents / 2 on each axis) lies at center + R q, R the rotation of `quaternion`. */
+typedef struct {
+  uint32_t struct_size;   /* set by the caller to sizeof(occseg_box) */
+  double center[3];       /* metres, world frame (the map's origin and voxel size applied) */
+  double extents[3];      /* full edge lengths in metres along the box's axes */
+  double quaternion[4];   /* w, x, y, z: unit rotation from the map's axes to the box's, w >= 0 */
+} occseg_box;
+
+/* Fills `*out` with the oriented bounding box of segment `index` (0 .. count - 1; OCCSEG_ERANGE
+ * beyond). out->struct_size must be sizeof(occseg_box) of a version of this header
+ * (OCCSEG_EINVAL otherwise). Occupied segments: the smallest box (by volume) holding every voxel
+ * whole, among the map's axes, the principal axes of the voxel centres and the minimum-area turn
+ * about z; ties keep the map's axes, so an axis-aligned object gets the identity rotation and
+ * exactly its voxel box. Free and unknown segments: their axis-aligned voxel box. The boxes of
+ * all segments are computed on the first call (one pass over the labels; OCCSEG_ENOMEM when the
+ * occupied voxels' list does not fit) and kept in the result; they depend on the labels only,
+ * never on the thread count. Safe to call from several threads at once. */
+OCCSEG_API int occseg_result_segment_box(const occseg_result *result, uint32_t index, occseg_box *out);
+
+/* ========================================================================================== */
+/*  Writing the command's output files                                                        */
+/* ========================================================================================== */
+
+/* Writes into `dir` the output files of `occseg segment --out dir` named in `names` (a
+ * NULL-terminated array of file names), as the command writes them: "labels.npy",
+ * "labels.nrrd" (uint32 labels with the map's voxel size and origin, in the named space of a map
+ * read from a .nrrd file), "segments.json" (with the map's frame and the oriented boxes),
+ * "segments.ply" (the occupied segments' surfaces), and for 2D maps (nz = 1)
+ * "segmentation.pgm" and "segmentation.yaml" (a map_server map). NULL `names`: the command's
+ * default set that the library can write: labels.nrrd, segments.json and, for a 2D map, the PGM
+ * and YAML pair. The pictures, segments.ot and the point clouds need libraries liboccseg does
+ * not link (libpng, OctoMap, PCL) or the input itself: naming one fails with OCCSEG_EUNSUPPORTED;
+ * any other name, a name given twice, or a 2D file for a 3D map fails with OCCSEG_EINVAL naming
+ * it, before anything is written. All or nothing, exactly as occseg_result_write (creates `dir`,
+ * not its parents; on failure every file in `dir` is as it was). */
+OCCSEG_API int occseg_result_write_outputs(const occseg_result *result, const char *dir, const char *const *names);
+
 #ifdef __cplusplus
 } /* extern "C" */
 #endif
