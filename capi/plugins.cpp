@@ -201,7 +201,10 @@ int occseg_map_write_options(const occseg_map* map, const char* path, const char
     require(map, "map");
     require(path, "path");
     const occseg::capi::NrrdSpaceScope space(map->nrrd_space);  // for the built-in .nrrd writer
-    occseg::write_map(path, map->grid, option_list(options));
+    if (map->is_view)  // checked as a copy would have been, before anything is written
+      occseg::write_map(path, occseg::capi::converted(map), option_list(options));
+    else
+      occseg::write_map(path, map->grid, option_list(options));
   });
 }
 

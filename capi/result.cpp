@@ -31,7 +31,9 @@ void run_segment(occseg_result** out, occseg::Context* context, const occseg_map
     p.progress = [fn, user](const char* stage, double fraction) { return fn(stage, fraction, user) == 0; };
   }
   auto r = std::make_unique<occseg_result>();
-  r->result = context ? occseg::segment(*context, map->grid, p) : occseg::segment(map->grid, p);
+  occseg::capi::with_values(map, [&](const occseg::Grid& grid) {
+    r->result = context ? occseg::segment(*context, grid, p) : occseg::segment(grid, p);
+  });
   r->preset = occseg::preset_name(p.preset);
   *out = r.release();
 }
@@ -117,6 +119,40 @@ int occseg_result_states(const occseg_result* result, uint8_t* out, size_t count
     const auto& labels = result->result.labels;
     const auto& segs = result->result.segments;
     for (std::size_t i = 0; i < labels.size(); ++i) out[i] = static_cast<uint8_t>(segs[labels[i]].state);
+  });
+}
+
+int occseg_result_labels_view(const occseg_result* result, const uint32_t** out, size_t* count) {
+  return guard("occseg_result_labels_view", [&] {
+    if (out) *out = nullptr;
+    if (count) *count = 0;
+    require(result, "result");
+    require(out, "out");
+    require(count, "count");
+    *out = result->result.labels.data();
+    *count = result->result.labels.size();
+  });
+}
+
+int occseg_result_states_view(const occseg_result* result, const uint8_t** out, size_t* count) {
+  return guard("occseg_result_states_view", [&] {
+    if (out) *out = nullptr;
+    if (count) *count = 0;
+    require(result, "result");
+    require(out, "out");
+    require(count, "count");
+    // Made once (call_once: readers on several threads at once are allowed); a failed
+    // allocation leaves it to be tried again by the next call.
+    auto* r = const_cast<occseg_result*>(result);
+    std::call_once(r->states_once, [r] {
+      const auto& labels = r->result.labels;
+      const auto& segs = r->result.segments;
+      std::vector<uint8_t> s(labels.size());
+      for (std::size_t i = 0; i < labels.size(); ++i) s[i] = static_cast<uint8_t>(segs[labels[i]].state);
+      r->states = std::move(s);
+    });
+    *out = r->states.data();
+    *count = r->states.size();
   });
 }
 

@@ -461,6 +461,46 @@ OCCSEG_API int occseg_param_default(uint32_t index, char *buf, size_t size, size
 OCCSEG_API int occseg_map_read_options(occseg_map **out, const char *path, const char *const *options);
 OCCSEG_API int occseg_map_write_options(const occseg_map *map, const char *path, const char *const *options);
 
+/* ========================================================================================== */
+/*  Borrowed buffers: maps that view the caller's array, results read in place                */
+/* ========================================================================================== */
+
+/* Makes a map that reads the caller's buffer where it lies, instead of copying it as
+ * occseg_map_from_buffer_flags does. The arguments, their checks and their status codes are
+ * those of occseg_map_from_buffer_flags (strides in bytes, NULL: dense with x fastest; any
+ * occseg_dtype; the import flags), except that the values are not read here: they are checked
+ * as a call reads them, and a bad one fails that call (occseg_segment, occseg_context_segment,
+ * occseg_map_values, occseg_map_write) with the status and the text occseg_map_from_buffer_flags
+ * gives for the same buffer ("data: probability at voxel (x, y, z) = ... is NaN ...").
+ *
+ * Lifetime: the map refers to `data`; it holds no copy. The caller keeps the buffer alive, and
+ * its values unchanged, from this call until occseg_map_free(map); writing into it while a call
+ * reads the map is a data race, and freeing it first leaves the map dangling (any later use reads
+ * freed memory). Results do not refer to the map or the buffer: they may outlive both.
+ *
+ * Cost: a dense float32 buffer with x fastest (a C-order NumPy float32 array [z, y, x]) is read
+ * by the pipeline itself, in its first pass, with no copy at all. Any other dtype or layout is
+ * converted for each call that reads it into a temporary float array that the call frees (4 bytes
+ * per voxel during the call, nothing between calls); so is a float32 buffer under import flags
+ * when it holds a value the flags must change (it is first scanned for one). */
+OCCSEG_API int occseg_map_view_buffer(occseg_map **out, const void *data, occseg_dtype dtype,
+                                      const size_t dims[3] /* nx, ny, nz */,
+                                      const ptrdiff_t strides[3] /* bytes; NULL: dense, x fastest */,
+                                      double voxel_size, uint32_t flags);
+
+/* The result's labels where they lie: `*out` receives a pointer to its nx * ny * nz uint32
+ * labels (x fastest) and `*count` their number, without a copy. The pointer stays valid, and
+ * the labels unchanged, until the result is freed (occseg_result_free) or recycled
+ * (occseg_context_recycle); it must not be used after that. On failure (a NULL argument:
+ * OCCSEG_EINVAL) `*out` is set to NULL and `*count` to 0 where they are not NULL. */
+OCCSEG_API int occseg_result_labels_view(const occseg_result *result, const uint32_t **out, size_t *count);
+
+/* The voxels' states (occseg_state values, uint8, x fastest) as an array the result owns: made
+ * on the first call (1 byte per voxel, kept with the result; several threads may ask at once),
+ * then returned as it is. Valid, like the labels view, until the result is freed or recycled.
+ * OCCSEG_ENOMEM if the array cannot be made (a later call tries again). */
+OCCSEG_API int occseg_result_states_view(const occseg_result *result, const uint8_t **out, size_t *count);
+
 #ifdef __cplusplus
 } /* extern "C" */
 #endif
