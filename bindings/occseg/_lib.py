@@ -113,6 +113,10 @@ OPTIONAL_PROTOTYPES = {
     "occseg_param_default": (_I, [_U32, ctypes.c_char_p, ctypes.c_size_t, ctypes.POINTER(ctypes.c_size_t)]),
     "occseg_map_read_options": (_I, [ctypes.POINTER(_P), _S, ctypes.POINTER(_S)]),
     "occseg_map_write_options": (_I, [_P, _S, ctypes.POINTER(_S)]),
+    "occseg_map_view_buffer": (_I, [ctypes.POINTER(_P), _P, _I, c_size3, c_ptrdiff3, ctypes.c_double,
+                                    ctypes.c_uint32]),
+    "occseg_result_labels_view": (_I, [_P, ctypes.POINTER(_P), ctypes.POINTER(ctypes.c_size_t)]),
+    "occseg_result_states_view": (_I, [_P, ctypes.POINTER(_P), ctypes.POINTER(ctypes.c_size_t)]),
 }
 
 

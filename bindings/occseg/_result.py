@@ -2,13 +2,14 @@
 import ctypes
 import dataclasses
 import enum
+import weakref
 
 import numpy as np
 
 from ._args import integer, path_bytes
 from ._errors import OccsegError, Status, check
-from ._handles import Owned
-from ._lib import SegmentInfo, c_size3, lib
+from ._handles import Borrow, Owned
+from ._lib import SegmentInfo, c_size3, has, lib
 
 
 class State(enum.IntEnum):
@@ -41,11 +42,16 @@ class Segment:
 class Result(Owned):
     """The output of occseg.segment().
 
-    `labels` (uint32, the shape of the input: segment id per voxel), `segments` (list of Segment,
-    index == id), `timings` ({stage: seconds}), `voxel_size` and `origin` are plain Python and NumPy
-    data copied out at creation and stay usable after close(). states() and write() read the C
-    result, which close(), the end of a `with` block or garbage collection frees (after the last
-    running states() or write() of another thread returns, if one is running).
+    `labels` (uint32, the shape of the input: segment id per voxel) is a read-only NumPy array over
+    the C result's own label array, not a copy; states() likewise returns a read-only array over
+    the result's states. Each such array keeps the C result alive: close(), the end of a `with`
+    block or garbage collection free the C result only once the last array over it is gone (and
+    after the last running states() or write() of another thread returns). Copy an array
+    (labels.copy()) to modify it. `segments` (list of Segment, index == id), `timings`
+    ({stage: seconds}), `voxel_size` and `origin` are plain Python data. After close(), states()
+    and write() raise ValueError; `labels` stays usable. After Context.recycle(result), `labels`
+    is gone (ValueError) unless the caller still holds the array, in which case the result is not
+    recycled but freed when that array goes (a recycled label array is rewritten by the next call).
 
     Segment ids (mask(), voxels(), points()) are ints (Python or NumPy integers): a float or bool
     raises OccsegTypeError, an id outside [0, len(segments)) OccsegError ERANGE."""
@@ -67,8 +73,9 @@ class Result(Owned):
             raise OccsegError(Status.EINTERNAL, f"result dims {self.dims} do not match the input shape {self.shape}")
         self.voxel_size = voxel_size
         self.origin = tuple(origin)
-        self.labels = self._copy_out(h, lib.occseg_result_labels, np.uint32)
-        self.labels.flags.writeable = False  # mask() and voxels() rely on it; copy to modify
+        # mask() and voxels() rely on the labels being read-only; copy them to modify
+        self._labels = self._in_place(h, "occseg_result_labels_view", lib.occseg_result_labels, np.uint32)
+        self._labels_after_recycle = None  # a weak reference, once recycle() let the labels go
         self.segments = [self._segment(h, i) for i in range(lib.occseg_result_segment_count(h))]
         self.timings = {}
         for i in range(lib.occseg_result_stage_count(h)):
@@ -81,6 +88,38 @@ class Result(Owned):
         check(fn(h, out.ctypes.data, out.size))
         return out
 
+    def _in_place(self, h, view_fn, copy_fn, dtype):
+        """A read-only array over the C result's memory (kept alive by the array), or with a
+        library that has no view function, a read-only copy."""
+        if not has(view_fn):
+            out = self._copy_out(h, copy_fn, dtype)
+            out.flags.writeable = False
+            return out
+        address, count = ctypes.c_void_p(), ctypes.c_size_t()
+        check(getattr(lib, view_fn)(h, ctypes.byref(address), ctypes.byref(count)))
+        if count.value != int(np.prod(self.shape)) or not address.value:
+            raise OccsegError(Status.EINTERNAL, f"{view_fn} gave {count.value} values for shape {self.shape}")
+        return np.asarray(Borrow(self._h, address.value, self.shape, np.dtype(dtype).str))
+
+    @property
+    def labels(self):
+        """Segment id per voxel (uint32, the input's shape), read-only, over the C result's memory."""
+        labels = self._labels
+        if labels is None:
+            labels = self._labels_after_recycle() if self._labels_after_recycle is not None else None
+            if labels is None:
+                raise ValueError("occseg.Result: the labels went back to the context with recycle(); "
+                                 "hold result.labels before recycling to keep them (the result is then freed, "
+                                 "not recycled, once they go)")
+        return labels
+
+    def _let_go(self):
+        """Drops the result's own reference to its labels (for Context.recycle): the array dies
+        now unless the caller holds it, which then keeps the C result from being recycled."""
+        labels, self._labels = self._labels, None
+        if labels is not None and self._labels_after_recycle is None:
+            self._labels_after_recycle = weakref.ref(labels)
+
     @staticmethod
     def _segment(h, index):
         info = SegmentInfo(struct_size=ctypes.sizeof(SegmentInfo))
@@ -89,8 +128,10 @@ class Result(Owned):
                        (tuple(info.bbox_min), tuple(info.bbox_max)), tuple(info.centroid))
 
     def states(self):
-        """The state (State value) of each voxel, uint8, the shape of labels."""
-        return self._call(self._copy_out, lib.occseg_result_states, np.uint8)
+        """The state (State value) of each voxel, uint8, the shape of labels: a read-only array
+        over memory of the C result (made on the first call, 1 byte per voxel, kept with the
+        result), which it keeps alive like `labels`. ValueError once the result is closed."""
+        return self._call(self._in_place, "occseg_result_states_view", lib.occseg_result_states, np.uint8)
 
     def write(self, directory):
         """Writes labels.npy and segments.json into `directory`, the same files as

@@ -26,6 +26,8 @@
  *     the parameters at its start, so the object may be changed or freed once it has returned.
  *   - occseg_last_error() is per thread: it describes the last failing call of the calling thread.
  *   - The progress callback is called on the thread that called occseg_segment().
+ *   - A map made by occseg_map_view_buffer reads the caller's buffer during every call on it: the
+ *     buffer must stay alive and must not be written while any call uses the map (see there).
  *   - No handle may be freed (or a result recycled) while a call uses it: not from another
  *     thread, and not from inside the progress callback of an occseg_segment() or
  *     occseg_context_segment() that uses that map or context; the call would read freed memory.
@@ -276,10 +278,13 @@ typedef enum { OCCSEG_FREE = 0, OCCSEG_UNKNOWN = 1, OCCSEG_OCCUPIED = 2 } occseg
  * callback cancels, OCCSEG_ENOMEM when memory runs out. */
 OCCSEG_API int occseg_segment(occseg_result **out, const occseg_map *map, const occseg_params *params);
 
-/* A caller-owned context: a small pool of worker threads kept between calls. occseg_segment()
- * starts and joins threads inside every parallel stage (about 30 times per call); a program that
- * segments maps again and again (a robot re-segmenting its map at a few hertz) runs them on a
- * context instead. There is no global state: contexts are independent of each other. */
+/* A caller-owned context: a small pool of worker threads kept between calls, and (with
+ * occseg_context_recycle) the label array of a result handed back. occseg_segment() itself runs
+ * on a pool leased from a few idle pools the library keeps for the process (one call per pool at
+ * a time: concurrent calls never wait for each other; abandoned in a fork()ed child, joined at
+ * exit); nothing else is kept between its calls. A program that segments maps again and again (a
+ * robot re-segmenting its map at a few hertz) may also run them on a context of its own, which
+ * can recycle results. Contexts are independent of each other. */
 typedef struct occseg_context occseg_context;
 
 /* Starts a context with `threads` threads in all (the calling thread included; 0: one per
