@@ -52,6 +52,9 @@ struct occseg_result {
   // occseg_result_states_view's array, made on its first call (once, whichever thread asks).
   std::once_flag states_once;
   std::vector<uint8_t> states;
+  // occseg_result_segments_view's table, made on its first call likewise.
+  std::once_flag table_once;
+  std::vector<occseg_segment_info> table;
 };
 
 namespace occseg::capi {

@@ -1,5 +1,6 @@
 // occseg_segment and the occseg_result_* accessors.
 #include <algorithm>
+#include <cstring>
 #include <memory>
 
 #include "internal.hpp"
@@ -17,6 +18,19 @@ void check_capacity(const occseg_result* r, std::size_t count) {
   if (count < n)
     throw Error(Status::out_of_range, "count " + std::to_string(count) + " is smaller than the " +
                                           std::to_string(n) + " voxels of the result");
+}
+
+// The fields of `info` after struct_size, from a segment.
+void fill_info(const occseg::Segment& s, occseg_segment_info& info) {
+  info.id = s.id;
+  info.state = static_cast<occseg_state>(s.state);
+  info.voxels = s.voxels;
+  info.mop = s.mop;
+  for (int k = 0; k < 3; ++k) {
+    info.bbox_min[k] = s.bbox_min[k];
+    info.bbox_max[k] = s.bbox_max[k];
+    info.centroid[k] = s.centroid[k];
+  }
 }
 
 // The body of occseg_segment and occseg_context_segment (context: NULL for none).
@@ -89,16 +103,7 @@ int occseg_result_segment(const occseg_result* result, uint32_t index, occseg_se
     if (index >= segs.size())
       throw Error(Status::out_of_range, "index " + std::to_string(index) + " is out of range (the result has " +
                                             std::to_string(segs.size()) + " segments)");
-    const occseg::Segment& s = segs[index];
-    out->id = s.id;
-    out->state = static_cast<occseg_state>(s.state);
-    out->voxels = s.voxels;
-    out->mop = s.mop;
-    for (int k = 0; k < 3; ++k) {
-      out->bbox_min[k] = s.bbox_min[k];
-      out->bbox_max[k] = s.bbox_max[k];
-      out->centroid[k] = s.centroid[k];
-    }
+    fill_info(segs[index], *out);
   });
 }
 
@@ -153,6 +158,28 @@ int occseg_result_states_view(const occseg_result* result, const uint8_t** out, 
     });
     *out = r->states.data();
     *count = r->states.size();
+  });
+}
+
+int occseg_result_segments_view(const occseg_result* result, const occseg_segment_info** out, size_t* count) {
+  return guard("occseg_result_segments_view", [&] {
+    if (out) *out = nullptr;
+    if (count) *count = 0;
+    require(result, "result");
+    require(out, "out");
+    require(count, "count");
+    auto* r = const_cast<occseg_result*>(result);
+    std::call_once(r->table_once, [r] {
+      std::vector<occseg_segment_info> t(r->result.segments.size());
+      for (std::size_t i = 0; i < t.size(); ++i) {
+        std::memset(&t[i], 0, sizeof t[i]);  // padding too: the table is compared bytewise
+        t[i].struct_size = sizeof(occseg_segment_info);
+        fill_info(r->result.segments[i], t[i]);
+      }
+      r->table = std::move(t);
+    });
+    *out = r->table.data();
+    *count = r->table.size();
   });
 }
 

@@ -117,6 +117,7 @@ OPTIONAL_PROTOTYPES = {
                                     ctypes.c_uint32]),
     "occseg_result_labels_view": (_I, [_P, ctypes.POINTER(_P), ctypes.POINTER(ctypes.c_size_t)]),
     "occseg_result_states_view": (_I, [_P, ctypes.POINTER(_P), ctypes.POINTER(ctypes.c_size_t)]),
+    "occseg_result_segments_view": (_I, [_P, ctypes.POINTER(_P), ctypes.POINTER(ctypes.c_size_t)]),
 }
 
 

@@ -1,4 +1,5 @@
 """Result: labels, the segment table and timings of one segmentation (an occseg_result handle)."""
+import collections.abc
 import ctypes
 import dataclasses
 import enum
@@ -39,6 +40,52 @@ class Segment:
         return tuple(slice(lo[k], hi[k] + 1) for k in (2, 1, 0))
 
 
+class Segments(collections.abc.Sequence):
+    """The segment table as a read-only sequence of Segment, index == id, made on access from
+    the C result's own table (occseg_result_segments_view) instead of one C call and one Python
+    object per segment up front (a noisy map has a segment per 80 voxels). Compares equal to any
+    sequence of the same Segments (a list too)."""
+
+    __slots__ = ("_table",)
+
+    def __init__(self, table):
+        self._table = table  # structured array, read-only
+
+    def __len__(self):
+        return len(self._table)
+
+    def __getitem__(self, index):
+        if isinstance(index, slice):
+            return [self[i] for i in range(*index.indices(len(self)))]
+        row = self._table[index]
+        return Segment(int(row["id"]), State(int(row["state"])), int(row["voxels"]), float(row["mop"]),
+                       (tuple(int(v) for v in row["bbox_min"]), tuple(int(v) for v in row["bbox_max"])),
+                       tuple(float(v) for v in row["centroid"]))
+
+    def __iter__(self):
+        return (self[i] for i in range(len(self)))
+
+    def __eq__(self, other):
+        if isinstance(other, Segments):
+            return bool(np.array_equal(self._table, other._table))
+        if not isinstance(other, collections.abc.Sequence) or isinstance(other, (str, bytes)):
+            return NotImplemented
+        return len(self) == len(other) and all(a == b for a, b in zip(self, other))
+
+    def __ne__(self, other):
+        eq = self.__eq__(other)
+        return eq if eq is NotImplemented else not eq
+
+    __hash__ = None
+
+    def _detached(self):
+        """The same table in memory of its own (for a result handed back to a context)."""
+        return Segments(self._table.copy())
+
+    def __repr__(self):
+        return f"<occseg.Segments: {len(self)} segments>"
+
+
 class Result(Owned):
     """The output of occseg.segment().
 
@@ -47,7 +94,8 @@ class Result(Owned):
     the result's states. Each such array keeps the C result alive: close(), the end of a `with`
     block or garbage collection free the C result only once the last array over it is gone (and
     after the last running states() or write() of another thread returns). Copy an array
-    (labels.copy()) to modify it. `segments` (list of Segment, index == id), `timings`
+    (labels.copy()) to modify it. `segments` (a sequence of Segment, index == id, made on access
+    from the C result's table, which it also keeps alive; equal to a list of the same), `timings`
     ({stage: seconds}), `voxel_size` and `origin` are plain Python data. After close(), states()
     and write() raise ValueError; `labels` stays usable. After Context.recycle(result), `labels`
     is gone (ValueError) unless the caller still holds the array, in which case the result is not
@@ -76,7 +124,10 @@ class Result(Owned):
         # mask() and voxels() rely on the labels being read-only; copy them to modify
         self._labels = self._in_place(h, "occseg_result_labels_view", lib.occseg_result_labels, np.uint32)
         self._labels_after_recycle = None  # a weak reference, once recycle() let the labels go
-        self.segments = [self._segment(h, i) for i in range(lib.occseg_result_segment_count(h))]
+        if has("occseg_result_segments_view"):
+            self.segments = Segments(self._table(h))
+        else:
+            self.segments = [self._segment(h, i) for i in range(lib.occseg_result_segment_count(h))]
         self.timings = {}
         for i in range(lib.occseg_result_stage_count(h)):
             name, seconds = ctypes.c_char_p(), ctypes.c_double()
@@ -116,9 +167,21 @@ class Result(Owned):
     def _let_go(self):
         """Drops the result's own reference to its labels (for Context.recycle): the array dies
         now unless the caller holds it, which then keeps the C result from being recycled."""
+        if isinstance(self.segments, Segments):
+            self.segments = self.segments._detached()  # a copy of the table: its view would hold the result
         labels, self._labels = self._labels, None
         if labels is not None and self._labels_after_recycle is None:
             self._labels_after_recycle = weakref.ref(labels)
+
+    def _table(self, h):
+        """The C result's segment table as a read-only structured array over its memory."""
+        address, count = ctypes.c_void_p(), ctypes.c_size_t()
+        check(lib.occseg_result_segments_view(h, ctypes.byref(address), ctypes.byref(count)))
+        dtype = np.dtype(SegmentInfo)
+        if count.value == 0:
+            return np.zeros(0, dtype)
+        raw = np.asarray(Borrow(self._h, address.value, (count.value * dtype.itemsize,), "|u1"))
+        return raw.view(dtype)
 
     @staticmethod
     def _segment(h, index):

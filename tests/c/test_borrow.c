@@ -298,7 +298,7 @@ static void view_arguments_fail_as_in_the_copy_path(void **state) {
   EXPECT_FAIL(occseg_map_view_buffer(NULL, p, OCCSEG_F32, kDims, NULL, 1.0, 0), OCCSEG_EINVAL, "'out'");
 }
 
-static void labels_and_states_views(void **state) {
+static void labels_states_and_table_views(void **state) {
   occseg_map *map = scene_map();
   occseg_result *r = NULL;
   const uint32_t *labels = (const uint32_t *)&r, *again = NULL;
@@ -337,6 +337,26 @@ static void labels_and_states_views(void **state) {
   assert_int_equal(occseg_result_states_view(r, &states2, &count), OCCSEG_OK);
   assert_ptr_equal(states, states2);
   for (i = 0; i < n; ++i) assert_true(states[i] <= OCCSEG_OCCUPIED);
+  {
+    const occseg_segment_info *table = (const occseg_segment_info *)&r, *table2 = NULL;
+    uint32_t s;
+    EXPECT_FAIL(occseg_result_segments_view(NULL, &table, &count), OCCSEG_EINVAL, "'result'");
+    assert_null(table);
+    EXPECT_FAIL(occseg_result_segments_view(r, NULL, &count), OCCSEG_EINVAL, "'out'");
+    EXPECT_FAIL(occseg_result_segments_view(r, &table, NULL), OCCSEG_EINVAL, "'count'");
+    assert_int_equal(occseg_result_segments_view(r, &table, &count), OCCSEG_OK);
+    assert_int_equal(count, occseg_result_segment_count(r));
+    assert_true(count >= 3);
+    for (s = 0; s < count; ++s) {
+      occseg_segment_info one;
+      memset(&one, 0, sizeof one);
+      one.struct_size = sizeof one;
+      assert_int_equal(occseg_result_segment(r, s, &one), OCCSEG_OK);
+      assert_memory_equal(&one, &table[s], sizeof one);
+    }
+    assert_int_equal(occseg_result_segments_view(r, &table2, &count), OCCSEG_OK);
+    assert_ptr_equal(table, table2);
+  }
   occseg_result_free(r); /* the views end here (valgrind's run of this suite would see a late read) */
   occseg_map_free(map);
   free(copied);
@@ -371,7 +391,7 @@ int run_borrow_tests(void) {
     cmocka_unit_test(bad_values_fail_as_in_the_copy_path),
     cmocka_unit_test(flags_apply_as_in_the_copy_path),
     cmocka_unit_test(view_arguments_fail_as_in_the_copy_path),
-    cmocka_unit_test(labels_and_states_views),
+    cmocka_unit_test(labels_states_and_table_views),
     cmocka_unit_test(labels_view_ends_at_recycle),
   };
   return cmocka_run_group_tests_name("borrow", tests, NULL, NULL);

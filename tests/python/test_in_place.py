@@ -215,3 +215,20 @@ def test_a_foreign_byte_order_is_converted_and_other_dtypes_refused():
     with pytest.raises(occseg.OccsegError) as e:
         occseg.segment(m.astype(np.float16))
     assert e.value.status == occseg.Status.EINVAL and "float16" in e.value.message
+
+
+def test_segments_read_from_the_c_table_equal_the_per_segment_calls():
+    r = occseg.segment(noisy_scene(seed=22).astype(np.float32))
+    assert isinstance(r.segments, occseg._result.Segments)
+    with r._used() as h:
+        one_by_one = [occseg.Result._segment(h, i) for i in range(lib.occseg_result_segment_count(h))]
+    assert len(r.segments) == len(one_by_one) > 3
+    assert list(r.segments) == one_by_one and r.segments == one_by_one and one_by_one == r.segments
+    assert r.segments[-1] == one_by_one[-1] and r.segments[1:3] == one_by_one[1:3]
+    assert r.segments != one_by_one[:-1]
+    table = r.segments._table
+    assert not table.flags.writeable and np.shares_memory(table, table.base)
+    held = r.segments
+    del r
+    gc.collect()
+    assert list(held) == one_by_one  # the table keeps the C result alive too

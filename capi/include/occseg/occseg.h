@@ -506,6 +506,14 @@ OCCSEG_API int occseg_result_labels_view(const occseg_result *result, const uint
  * OCCSEG_ENOMEM if the array cannot be made (a later call tries again). */
 OCCSEG_API int occseg_result_states_view(const occseg_result *result, const uint8_t **out, size_t *count);
 
+/* The segment table as an array the result owns: `*count` entries, entry i as
+ * occseg_result_segment(result, i, ...) fills it (struct_size = sizeof(occseg_segment_info) of
+ * this library; padding bytes zero), made on the first call (once, as above) and kept with the
+ * result; valid until the result is freed or recycled. For bindings that read the whole table at
+ * once. OCCSEG_ENOMEM if it cannot be made (a later call tries again). */
+OCCSEG_API int occseg_result_segments_view(const occseg_result *result, const occseg_segment_info **out,
+                                           size_t *count);
+
 #ifdef __cplusplus
 } /* extern "C" */
 #endif
