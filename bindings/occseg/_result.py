@@ -125,9 +125,9 @@ class Result(Owned):
         self._labels = self._in_place(h, "occseg_result_labels_view", lib.occseg_result_labels, np.uint32)
         self._labels_after_recycle = None  # a weak reference, once recycle() let the labels go
         if has("occseg_result_segments_view"):
-            self.segments = Segments(self._table(h))
+            self._segments = None  # the table is read in place on first access (segments)
         else:
-            self.segments = [self._segment(h, i) for i in range(lib.occseg_result_segment_count(h))]
+            self._segments = [self._segment(h, i) for i in range(lib.occseg_result_segment_count(h))]
         self.timings = {}
         for i in range(lib.occseg_result_stage_count(h)):
             name, seconds = ctypes.c_char_p(), ctypes.c_double()
@@ -153,6 +153,24 @@ class Result(Owned):
         return np.asarray(Borrow(self._h, address.value, self.shape, np.dtype(dtype).str))
 
     @property
+    def segments(self):
+        """The segment table (Segments, index == id), read from the C result on first access:
+        80 bytes per segment held with the result from then on (a call that only needs labels
+        never makes it). Made by close() and recycle() too, so it stays usable after them."""
+        segments = self._segments
+        if segments is None:
+            segments = self._segments = Segments(self._call(self._table))
+        return segments
+
+    def close(self):
+        if self._segments is None and not self.closed:
+            try:
+                self.segments  # stays usable after close(), like labels
+            except (ValueError, OccsegError, MemoryError):
+                pass  # closed meanwhile by another thread, or out of memory: it is then unavailable
+        super().close()
+
+    @property
     def labels(self):
         """Segment id per voxel (uint32, the input's shape), read-only, over the C result's memory."""
         labels = self._labels
@@ -167,8 +185,10 @@ class Result(Owned):
     def _let_go(self):
         """Drops the result's own reference to its labels (for Context.recycle): the array dies
         now unless the caller holds it, which then keeps the C result from being recycled."""
-        if isinstance(self.segments, Segments):
-            self.segments = self.segments._detached()  # a copy of the table: its view would hold the result
+        if not self.closed:
+            segments = self.segments
+            if isinstance(segments, Segments):
+                self._segments = segments._detached()  # a copy of the table: its view would hold the result
         labels, self._labels = self._labels, None
         if labels is not None and self._labels_after_recycle is None:
             self._labels_after_recycle = weakref.ref(labels)

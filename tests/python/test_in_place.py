@@ -232,3 +232,14 @@ def test_segments_read_from_the_c_table_equal_the_per_segment_calls():
     del r
     gc.collect()
     assert list(held) == one_by_one  # the table keeps the C result alive too
+
+
+def test_the_segment_table_is_read_on_first_access_and_survives_close():
+    m = noisy_scene(seed=23).astype(np.float32)
+    ref = copied(m)
+    r = occseg.segment(m)
+    assert r._segments is None  # a call that only needs labels never makes the table
+    assert r.segments == ref.segments and r._segments is not None
+    with occseg.segment(m) as s:
+        pass
+    assert s.closed and s.segments == ref.segments  # made by close(), usable after it
