@@ -6,6 +6,9 @@
 #include <mutex>
 #include <vector>
 #include <exception>
+#include <functional>
+#include <mutex>
+#include <vector>
 #include <new>
 #include <stdexcept>
 #include <string>
@@ -28,6 +31,18 @@ struct occseg_params {
 struct occseg_map {
   occseg::Grid grid;
   std::string nrrd_space;  // the named space of the .nrrd file it was read from; "" otherwise
+  // A map made by occseg_map_view_buffer reads the caller's buffer: `grid` then holds the dims,
+  // voxel size and origin, grid.p is empty, and grid.borrowed points at the buffer when it is
+  // dense float32 with x fastest (the pipeline reads it as it lies); other buffers are converted
+  // for each call that needs the values (capi::with_values).
+  struct View {
+    const char* data = nullptr;  // voxel (0, 0, 0)
+    int dtype = 0;
+    ptrdiff_t strides[3] = {0, 0, 0};  // bytes
+    uint32_t flags = 0;                // occseg_import_flags
+  };
+  bool is_view = false;
+  View view;
 };
 
 struct occseg_context {
@@ -56,6 +71,12 @@ struct occseg_result {
   mutable std::mutex boxes_mutex;
   mutable bool boxes_done = false;
   mutable std::vector<occseg::OrientedBox> boxes_cache;
+  // occseg_result_states_view's array, made on its first call (once, whichever thread asks).
+  std::once_flag states_once;
+  std::vector<uint8_t> states;
+  // occseg_result_segments_view's table, made on its first call likewise.
+  std::once_flag table_once;
+  std::vector<occseg_segment_info> table;
 };
 
 namespace occseg::capi {
@@ -84,6 +105,16 @@ inline void require(const void* p, const char* name) {
   throw Error(Status::out_of_range, "index " + std::to_string(index) + " is out of range (there are " +
                                         std::to_string(count) + " " + what + ")");
 }
+
+// Calls fn(grid) with the map's values as a Grid: the map's own grid, or for a map that views a
+// caller's buffer, a grid that borrows the buffer (dense float32: no copy; the pipeline checks
+// the values as it reads them) or a temporary converted copy (other dtypes and strides; with
+// the import flags, any dtype whose values need them). Bad values in a borrowed buffer fail
+// with the status and text occseg_map_from_buffer_flags gives for the same buffer.
+void with_values(const occseg_map* map, const std::function<void(const Grid&)>& fn);
+// The map's values in a grid of its own: a copy of the map's grid, or of a viewed buffer
+// converted and checked as occseg_map_from_buffer_flags does (throws as it would).
+Grid converted(const occseg_map* map);
 
 // Runs `body`; returns 0 and clears the error on success, or the status of whatever it threw.
 template <class Body>

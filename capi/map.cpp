@@ -106,9 +106,9 @@ float occupancy(int8_t v, std::size_t x, std::size_t y, std::size_t z) {
                                      " is neither -1 (unknown) nor an occupancy in 0..100");
 }
 
-void convert(occseg::Grid& g, const char* base, int dtype, const ptrdiff_t s[3], uint32_t flags) {
-  const Dims& d = g.dims;
-  float* out = g.p.data();
+// The buffer's values as probabilities into out[x + nx * (y + ny * z)], checked as documented
+// for occseg_map_from_buffer (the first bad voxel in x-fastest order is named).
+void convert(float* out, const Dims& d, const char* base, int dtype, const ptrdiff_t s[3], uint32_t flags) {
   for (std::size_t z = 0; z < d.nz; ++z)
     for (std::size_t y = 0; y < d.ny; ++y) {
       const char* row = base + static_cast<ptrdiff_t>(z) * s[2] + static_cast<ptrdiff_t>(y) * s[1];
@@ -126,6 +126,50 @@ void convert(occseg::Grid& g, const char* base, int dtype, const ptrdiff_t s[3],
     }
 }
 
+// The checks of occseg_map_from_buffer_flags and occseg_map_view_buffer, in their order: a map
+// with dims and voxel size set and `view` describing the buffer (strides filled in).
+std::unique_ptr<occseg_map> checked_map(occseg_map** out, const void* data, occseg_dtype dtype, const size_t dims[3],
+                                        const ptrdiff_t strides[3], double voxel_size, uint32_t flags) {
+  require(out, "out");
+  *out = nullptr;
+  require(data, "data");
+  require(dims, "dims");
+  const int dt = occseg::capi::enum_value(dtype);
+  const std::size_t item = item_size(dt);
+  if (flags & ~uint32_t(OCCSEG_IMPORT_CLAMP | OCCSEG_IMPORT_NAN_UNKNOWN))
+    invalid("flags " + std::to_string(flags) + " has bits that are no occseg_import_flags");
+  const Dims d{dims[0], dims[1], dims[2]};
+  occseg::check_dims(d);
+  check_voxel_size(voxel_size);
+  occseg::check_geometry(d, voxel_size, {0, 0, 0});  // the far corner must not overflow
+  auto m = std::make_unique<occseg_map>();
+  ptrdiff_t* s = m->view.strides;
+  if (strides) {
+    std::copy(strides, strides + 3, s);
+    check_strides(d, s, item);
+  } else {  // dense: fits, since check_dims bounds the voxel count by 2^40
+    s[0] = static_cast<ptrdiff_t>(item);
+    s[1] = s[0] * static_cast<ptrdiff_t>(d.nx);
+    s[2] = s[1] * static_cast<ptrdiff_t>(d.ny);
+  }
+  m->grid.dims = d;
+  m->grid.voxel_size = voxel_size;
+  m->view.data = static_cast<const char*>(data);
+  m->view.dtype = dt;
+  m->view.flags = flags;
+  return m;
+}
+
+// True when the viewed buffer is laid out as a Grid's values: float32, x fastest, dense (the
+// stride of a one-voxel axis is never used, so any value there is dense).
+bool dense_f32(const occseg_map& m) {
+  const Dims& d = m.grid.dims;
+  const ptrdiff_t* s = m.view.strides;
+  return m.view.dtype == OCCSEG_F32 && (d.nx == 1 || s[0] == 4) &&
+         (d.ny == 1 || s[1] == static_cast<ptrdiff_t>(4 * d.nx)) &&
+         (d.nz == 1 || s[2] == static_cast<ptrdiff_t>(4 * d.nx * d.ny));
+}
+
 void dims_out(const Dims& d, size_t dims[3]) {
   dims[0] = d.nx;
   dims[1] = d.ny;
@@ -134,37 +178,59 @@ void dims_out(const Dims& d, size_t dims[3]) {
 
 }  // namespace
 
+namespace occseg::capi {
+
+void with_values(const occseg_map* map, const std::function<void(const Grid&)>& fn) {
+  if (!map->is_view) return fn(map->grid);
+  const occseg_map::View& v = map->view;
+  const Grid& g = map->grid;
+  // A float32 buffer that needs no import flag is read where it lies; the flags can only be
+  // honoured on a copy, made when the buffer holds a value that needs them.
+  if (g.borrowed && (v.flags == 0 || occseg::probabilities_in_range(g.borrowed, g.dims.count()))) {
+    try {
+      return fn(g);
+    } catch (const Error& e) {
+      if (e.status() != Status::bad_value) throw;
+      // The pipeline found a value outside [0, 1] (it names it its own way): the conversion
+      // below names the first one as occseg_map_from_buffer does, and throws.
+    }
+  }
+  fn(converted(map));
+}
+
+Grid converted(const occseg_map* map) {
+  if (!map->is_view) return map->grid;
+  const occseg_map::View& v = map->view;
+  Grid copy;
+  copy.dims = map->grid.dims;
+  copy.voxel_size = map->grid.voxel_size;
+  copy.origin = map->grid.origin;
+  copy.p.resize(copy.dims.count());
+  convert(copy.p.data(), copy.dims, v.data, v.dtype, v.strides, v.flags);
+  return copy;
+}
+
+}  // namespace occseg::capi
+
 extern "C" {
 
 int occseg_map_from_buffer_flags(occseg_map** out, const void* data, occseg_dtype dtype, const size_t dims[3],
                                  const ptrdiff_t strides[3], double voxel_size, uint32_t flags) {
   return guard("occseg_map_from_buffer", [&] {
-    require(out, "out");
-    *out = nullptr;
-    require(data, "data");
-    require(dims, "dims");
-    const int dt = occseg::capi::enum_value(dtype);
-    const std::size_t item = item_size(dt);
-    if (flags & ~uint32_t(OCCSEG_IMPORT_CLAMP | OCCSEG_IMPORT_NAN_UNKNOWN))
-      invalid("flags " + std::to_string(flags) + " has bits that are no occseg_import_flags");
-    const Dims d{dims[0], dims[1], dims[2]};
-    occseg::check_dims(d);
-    check_voxel_size(voxel_size);
-    occseg::check_geometry(d, voxel_size, {0, 0, 0});  // the far corner must not overflow
-    ptrdiff_t s[3];
-    if (strides) {
-      std::copy(strides, strides + 3, s);
-      check_strides(d, s, item);
-    } else {  // dense: fits, since check_dims bounds the voxel count by 2^40
-      s[0] = static_cast<ptrdiff_t>(item);
-      s[1] = s[0] * static_cast<ptrdiff_t>(d.nx);
-      s[2] = s[1] * static_cast<ptrdiff_t>(d.ny);
-    }
-    auto m = std::make_unique<occseg_map>();
-    m->grid.dims = d;
-    m->grid.voxel_size = voxel_size;
-    m->grid.p.resize(d.count());
-    convert(m->grid, static_cast<const char*>(data), dt, s, flags);
+    auto m = checked_map(out, data, dtype, dims, strides, voxel_size, flags);
+    m->grid.p.resize(m->grid.dims.count());
+    convert(m->grid.p.data(), m->grid.dims, m->view.data, m->view.dtype, m->view.strides, flags);
+    m->view = occseg_map::View();
+    *out = m.release();
+  });
+}
+
+int occseg_map_view_buffer(occseg_map** out, const void* data, occseg_dtype dtype, const size_t dims[3],
+                           const ptrdiff_t strides[3], double voxel_size, uint32_t flags) {
+  return guard("occseg_map_view_buffer", [&] {
+    auto m = checked_map(out, data, dtype, dims, strides, voxel_size, flags);
+    m->is_view = true;
+    if (dense_f32(*m)) m->grid.borrowed = reinterpret_cast<const float*>(m->view.data);
     *out = m.release();
   });
 }
@@ -233,11 +299,16 @@ int occseg_map_values(const occseg_map* map, float* out, size_t count) {
   return guard("occseg_map_values", [&] {
     require(map, "map");
     require(out, "out");
-    const std::vector<float>& p = map->grid.p;
-    if (count < p.size())
+    const std::size_t n = map->grid.dims.count();
+    if (count < n)
       throw Error(Status::out_of_range, "count " + std::to_string(count) + " is smaller than the " +
-                                            std::to_string(p.size()) + " voxels of the map");
-    std::copy(p.begin(), p.end(), out);
+                                            std::to_string(n) + " voxels of the map");
+    if (map->is_view) {  // straight from the buffer, checked as a copy would be
+      const occseg_map::View& v = map->view;
+      convert(out, map->grid.dims, v.data, v.dtype, v.strides, v.flags);
+    } else {
+      std::copy(map->grid.p.begin(), map->grid.p.end(), out);
+    }
   });
 }
 

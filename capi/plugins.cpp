@@ -285,7 +285,12 @@ int occseg_map_write_options(const occseg_map* map, const char* path, const char
     const occseg::capi::NrrdSpaceScope space(map->nrrd_space);  // for the built-in .nrrd writer
     const std::string ext = occseg::file_extension(path);
     const std::string hint = occseg::find_writer(ext) ? "" : serve_extension(ext, false);
-    with_hint(hint, [&] { occseg::write_map(path, map->grid, option_list(options)); });
+    with_hint(hint, [&] {
+      if (map->is_view)  // checked as a copy would have been, before anything is written
+        occseg::write_map(path, occseg::capi::converted(map), option_list(options));
+      else
+        occseg::write_map(path, map->grid, option_list(options));
+    });
   });
 }
 

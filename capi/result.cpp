@@ -1,5 +1,6 @@
 // occseg_segment and the occseg_result_* accessors.
 #include <algorithm>
+#include <cstring>
 #include <memory>
 
 #include "internal.hpp"
@@ -19,6 +20,19 @@ void check_capacity(const occseg_result* r, std::size_t count) {
                                           std::to_string(n) + " voxels of the result");
 }
 
+// The fields of `info` after struct_size, from a segment.
+void fill_info(const occseg::Segment& s, occseg_segment_info& info) {
+  info.id = s.id;
+  info.state = static_cast<occseg_state>(s.state);
+  info.voxels = s.voxels;
+  info.mop = s.mop;
+  for (int k = 0; k < 3; ++k) {
+    info.bbox_min[k] = s.bbox_min[k];
+    info.bbox_max[k] = s.bbox_max[k];
+    info.centroid[k] = s.centroid[k];
+  }
+}
+
 // The body of occseg_segment and occseg_context_segment (context: NULL for none).
 void run_segment(occseg_result** out, occseg::Context* context, const occseg_map* map, const occseg_params* params) {
   require(out, "out");
@@ -31,7 +45,9 @@ void run_segment(occseg_result** out, occseg::Context* context, const occseg_map
     p.progress = [fn, user](const char* stage, double fraction) { return fn(stage, fraction, user) == 0; };
   }
   auto r = std::make_unique<occseg_result>();
-  r->result = context ? occseg::segment(*context, map->grid, p) : occseg::segment(map->grid, p);
+  occseg::capi::with_values(map, [&](const occseg::Grid& grid) {
+    r->result = context ? occseg::segment(*context, grid, p) : occseg::segment(grid, p);
+  });
   r->preset = occseg::preset_name(p.preset);
   r->voxel_size = map->grid.voxel_size;
   r->origin = map->grid.origin;
@@ -90,16 +106,7 @@ int occseg_result_segment(const occseg_result* result, uint32_t index, occseg_se
     if (index >= segs.size())
       throw Error(Status::out_of_range, "index " + std::to_string(index) + " is out of range (the result has " +
                                             std::to_string(segs.size()) + " segments)");
-    const occseg::Segment& s = segs[index];
-    out->id = s.id;
-    out->state = static_cast<occseg_state>(s.state);
-    out->voxels = s.voxels;
-    out->mop = s.mop;
-    for (int k = 0; k < 3; ++k) {
-      out->bbox_min[k] = s.bbox_min[k];
-      out->bbox_max[k] = s.bbox_max[k];
-      out->centroid[k] = s.centroid[k];
-    }
+    fill_info(segs[index], *out);
   });
 }
 
@@ -120,6 +127,62 @@ int occseg_result_states(const occseg_result* result, uint8_t* out, size_t count
     const auto& labels = result->result.labels;
     const auto& segs = result->result.segments;
     for (std::size_t i = 0; i < labels.size(); ++i) out[i] = static_cast<uint8_t>(segs[labels[i]].state);
+  });
+}
+
+int occseg_result_labels_view(const occseg_result* result, const uint32_t** out, size_t* count) {
+  return guard("occseg_result_labels_view", [&] {
+    if (out) *out = nullptr;
+    if (count) *count = 0;
+    require(result, "result");
+    require(out, "out");
+    require(count, "count");
+    *out = result->result.labels.data();
+    *count = result->result.labels.size();
+  });
+}
+
+int occseg_result_states_view(const occseg_result* result, const uint8_t** out, size_t* count) {
+  return guard("occseg_result_states_view", [&] {
+    if (out) *out = nullptr;
+    if (count) *count = 0;
+    require(result, "result");
+    require(out, "out");
+    require(count, "count");
+    // Made once (call_once: readers on several threads at once are allowed); a failed
+    // allocation leaves it to be tried again by the next call.
+    auto* r = const_cast<occseg_result*>(result);
+    std::call_once(r->states_once, [r] {
+      const auto& labels = r->result.labels;
+      const auto& segs = r->result.segments;
+      std::vector<uint8_t> s(labels.size());
+      for (std::size_t i = 0; i < labels.size(); ++i) s[i] = static_cast<uint8_t>(segs[labels[i]].state);
+      r->states = std::move(s);
+    });
+    *out = r->states.data();
+    *count = r->states.size();
+  });
+}
+
+int occseg_result_segments_view(const occseg_result* result, const occseg_segment_info** out, size_t* count) {
+  return guard("occseg_result_segments_view", [&] {
+    if (out) *out = nullptr;
+    if (count) *count = 0;
+    require(result, "result");
+    require(out, "out");
+    require(count, "count");
+    auto* r = const_cast<occseg_result*>(result);
+    std::call_once(r->table_once, [r] {
+      std::vector<occseg_segment_info> t(r->result.segments.size());
+      for (std::size_t i = 0; i < t.size(); ++i) {
+        std::memset(&t[i], 0, sizeof t[i]);  // padding too: the table is compared bytewise
+        t[i].struct_size = sizeof(occseg_segment_info);
+        fill_info(r->result.segments[i], t[i]);
+      }
+      r->table = std::move(t);
+    });
+    *out = r->table.data();
+    *count = r->table.size();
   });
 }
 

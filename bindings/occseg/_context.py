@@ -39,14 +39,17 @@ class Context(Owned):
         context=self) writes its labels into that result's C label array instead of allocating
         fresh memory (about 7 % of a call on a 320 x 320 x 128 map; the context holds the array,
         4 bytes per voxel, until a call takes it; that call's peak is a plain call's). `result` is
-        closed: its labels, segments and timings stay usable (they are Python copies), states()
-        and write() do not. A closed result is ignored; a result that another thread is reading
-        (states(), write()) is closed, and freed without being kept, when that call returns."""
+        closed: its segments and timings stay usable (Python data), its labels (an array over
+        the very memory handed back), states() and write() do not. If the caller still holds
+        result.labels or an array from states(), or another thread is reading it (states(),
+        write()), the result is closed and freed, not kept, when the last of those goes, so an
+        array the caller holds is never overwritten. A closed result is ignored."""
         if not has("occseg_context_recycle"):
             raise OccsegError(Status.EUNSUPPORTED, "occseg.Context.recycle: the loaded liboccseg has no occseg_context_recycle")
         if not isinstance(result, Result):
             raise OccsegError(Status.EINVAL, f"occseg.Context.recycle: expected an occseg.Result, not {type(result).__name__}")
         with self._used() as context:  # ValueError if this context is closed, before the result is touched
+            result._let_go()  # the labels array over the C result, unless the caller holds it
             handle = result._detach()
             if handle is not None:
                 lib.occseg_context_recycle(context, handle)

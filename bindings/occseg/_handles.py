@@ -39,17 +39,19 @@ class _Handle:
     to the owner (the finalizer would keep the owner alive). Invariant: `value` is None once the
     handle has been freed or given away, and then `closed` is true and `users` is 0."""
 
-    __slots__ = ("lock", "value", "kind", "free", "what", "users", "closed")
+    __slots__ = ("lock", "value", "kind", "free", "what", "users", "closed", "keep")
 
-    def __init__(self, value, kind, free, what):
+    def __init__(self, value, kind, free, what, keep=None):
         self.lock = threading.Lock()
         self.value, self.kind, self.free, self.what = value, kind, free, what
+        self.keep = keep  # what the C object refers to (a map's viewed array): released after the free
         self.users = 0  # calls running on the handle
         self.closed = False
         _count(kind, +1)
 
     def _free(self, value):
         self.free(value)
+        self.keep = None
         _count(self.kind, -1)
 
     def closed_error(self):
@@ -125,6 +127,26 @@ class _Use:
         self._h.release()
 
 
+class Borrow:
+    """The base of a NumPy array over memory a C handle owns (a result's labels): it holds a use
+    of the handle, so that close() of the owner, and the owner's collection, free the C object
+    only once the last such array is gone. Read-only arrays: the C memory is shared."""
+
+    __slots__ = ("_h", "__array_interface__", "__weakref__")
+
+    def __init__(self, handle, address, shape, typestr):
+        self._h = None
+        handle.acquire()  # ValueError when the owner is closed
+        self._h = handle
+        self.__array_interface__ = {"version": 3, "shape": tuple(shape), "typestr": typestr,
+                                    "data": (address, True)}  # True: read-only
+
+    def __del__(self):
+        h, self._h = self._h, None
+        if h is not None:
+            h.release()
+
+
 class Owned:
     """Base of the Python objects that own one C handle (Map, Result, Context, the parameter sets of
     segment()): close(), `closed`, the context manager, and uses of the handle. Subclasses call
@@ -135,9 +157,11 @@ class Owned:
 
     _what = "occseg object"
 
-    def _own(self, handle, kind, free):
+    def _own(self, handle, kind, free, keep=None):
+        """`keep`: an object the C handle refers to (the array a map views), kept alive until
+        the handle is freed, whenever that is."""
         value = handle.value if hasattr(handle, "value") else int(handle)
-        self._h = _Handle(value, kind, free, self._what)
+        self._h = _Handle(value, kind, free, self._what, keep)
         self._finalizer = weakref.finalize(self, self._h.close)
 
     def _used(self):

@@ -148,6 +148,11 @@ OPTIONAL_PROTOTYPES = {
                                         ctypes.c_size_t]),
     "occseg_result_segment_box": (_I, [_P, ctypes.c_uint32, ctypes.POINTER(BoxInfo)]),
     "occseg_result_write_outputs": (_I, [_P, _S, ctypes.POINTER(_S)]),
+    "occseg_map_view_buffer": (_I, [ctypes.POINTER(_P), _P, _I, c_size3, c_ptrdiff3, ctypes.c_double,
+                                    ctypes.c_uint32]),
+    "occseg_result_labels_view": (_I, [_P, ctypes.POINTER(_P), ctypes.POINTER(ctypes.c_size_t)]),
+    "occseg_result_states_view": (_I, [_P, ctypes.POINTER(_P), ctypes.POINTER(ctypes.c_size_t)]),
+    "occseg_result_segments_view": (_I, [_P, ctypes.POINTER(_P), ctypes.POINTER(ctypes.c_size_t)]),
 }
 
 

@@ -20,7 +20,9 @@ _EMPTY = ctypes.c_char(0)  # a valid address for zero-size arrays, so the C ABI 
 
 def as_voxel_array(probabilities, who):
     """`probabilities` as an ndarray [z, y, x] or [y, x] of an accepted dtype: the caller's own
-    array whenever possible (any strides); a copy only for foreign byte order or non-arrays."""
+    array whenever possible (any strides); a copy only for foreign byte order (converted to
+    native order, same dtype) or for what is not an array yet (np.asarray of a list, ...). Other
+    dtypes are refused, never guessed at."""
     try:
         arr = np.asarray(probabilities)
     except (ValueError, TypeError) as e:  # a ragged list, say: NumPy's own error, as an occseg one
@@ -92,6 +94,29 @@ class Map(Owned):
                 raise
             raise OccsegError(e.code, _python_flags(e.message)) from None
         return _configured(cls(out), None, o)
+
+    @classmethod
+    def view(cls, probabilities, voxel_size=1.0, origin=None, *, clamp=False, nan_unknown=False):
+        """A map that reads the array where it lies (occseg_map_view_buffer): no copy is made,
+        and the Map keeps a reference to the array until its C handle is freed. Arguments,
+        dtypes and strides as from_array(); the values are checked when a call reads them
+        (segment(), to_array(), write()), which raises what from_array() would raise for the same
+        array. The array must not change while a call reads the map (a data race); a change
+        between calls is seen by the next one. A dense float32 array (C order, [z, y, x]) is read
+        by the pipeline directly; other dtypes and layouts are converted by each call, into a
+        float32 copy the call frees. Needs a liboccseg with occseg_map_view_buffer."""
+        if not has("occseg_map_view_buffer"):
+            raise OccsegError(Status.EUNSUPPORTED, "occseg.Map.view: the loaded liboccseg has no occseg_map_view_buffer")
+        arr = as_voxel_array(probabilities, "occseg_map_view_buffer")
+        vs = real("occseg.Map.view", "voxel_size", voxel_size)
+        o = None if origin is None else _origin_arg("occseg.Map.view", origin)
+        data, dtype, dims, strides = buffer_args(arr)
+        flags = (_IMPORT_CLAMP if clamp else 0) | (_IMPORT_NAN_UNKNOWN if nan_unknown else 0)
+        out = ctypes.c_void_p()
+        check(lib.occseg_map_view_buffer(ctypes.byref(out), data, dtype, dims, strides, vs, flags))
+        m = cls.__new__(cls)
+        m._own(out, "map", lib.occseg_map_free, keep=arr)
+        return _configured(m, None, o)
 
     @property
     def dims(self):

@@ -1,13 +1,15 @@
 """Result: labels, the segment table and timings of one segmentation (an occseg_result handle)."""
+import collections.abc
 import ctypes
 import dataclasses
 import enum
+import weakref
 
 import numpy as np
 
 from ._args import integer, path_bytes
 from ._errors import OccsegError, Status, check
-from ._handles import Owned
+from ._handles import Borrow, Owned
 from ._lib import BoxInfo, SegmentInfo, c_size3, has, lib
 
 # The colours of occupied segments, as occseg/segment_colour.hpp gives them to every output of
@@ -72,14 +74,66 @@ class Segment:
 NO_LABEL = 0xFFFFFFFF  # OCCSEG_NO_LABEL: Result.point_labels of a point no voxel holds
 
 
+class Segments(collections.abc.Sequence):
+    """The segment table as a read-only sequence of Segment, index == id, made on access from
+    the C result's own table (occseg_result_segments_view) instead of one C call and one Python
+    object per segment up front (a noisy map has a segment per 80 voxels). Compares equal to any
+    sequence of the same Segments (a list too)."""
+
+    __slots__ = ("_table",)
+
+    def __init__(self, table):
+        self._table = table  # structured array, read-only
+
+    def __len__(self):
+        return len(self._table)
+
+    def __getitem__(self, index):
+        if isinstance(index, slice):
+            return [self[i] for i in range(*index.indices(len(self)))]
+        row = self._table[index]
+        return Segment(int(row["id"]), State(int(row["state"])), int(row["voxels"]), float(row["mop"]),
+                       (tuple(int(v) for v in row["bbox_min"]), tuple(int(v) for v in row["bbox_max"])),
+                       tuple(float(v) for v in row["centroid"]))
+
+    def __iter__(self):
+        return (self[i] for i in range(len(self)))
+
+    def __eq__(self, other):
+        if isinstance(other, Segments):
+            return bool(np.array_equal(self._table, other._table))
+        if not isinstance(other, collections.abc.Sequence) or isinstance(other, (str, bytes)):
+            return NotImplemented
+        return len(self) == len(other) and all(a == b for a, b in zip(self, other))
+
+    def __ne__(self, other):
+        eq = self.__eq__(other)
+        return eq if eq is NotImplemented else not eq
+
+    __hash__ = None
+
+    def _detached(self):
+        """The same table in memory of its own (for a result handed back to a context)."""
+        return Segments(self._table.copy())
+
+    def __repr__(self):
+        return f"<occseg.Segments: {len(self)} segments>"
+
+
 class Result(Owned):
     """The output of occseg.segment().
 
-    `labels` (uint32, the shape of the input: segment id per voxel), `segments` (list of Segment,
-    index == id), `timings` ({stage: seconds}), `voxel_size` and `origin` are plain Python and NumPy
-    data copied out at creation and stay usable after close(). states() and write() read the C
-    result, which close(), the end of a `with` block or garbage collection frees (after the last
-    running states() or write() of another thread returns, if one is running).
+    `labels` (uint32, the shape of the input: segment id per voxel) is a read-only NumPy array over
+    the C result's own label array, not a copy; states() likewise returns a read-only array over
+    the result's states. Each such array keeps the C result alive: close(), the end of a `with`
+    block or garbage collection free the C result only once the last array over it is gone (and
+    after the last running states() or write() of another thread returns). Copy an array
+    (labels.copy()) to modify it. `segments` (a sequence of Segment, index == id, made on access
+    from the C result's table, which it also keeps alive; equal to a list of the same), `timings`
+    ({stage: seconds}), `voxel_size` and `origin` are plain Python data. After close(), states()
+    and write() raise ValueError; `labels` stays usable. After Context.recycle(result), `labels`
+    is gone (ValueError) unless the caller still holds the array, in which case the result is not
+    recycled but freed when that array goes (a recycled label array is rewritten by the next call).
 
     Segment ids (mask(), voxels(), points()) are ints (Python or NumPy integers): a float or bool
     raises OccsegTypeError, an id outside [0, len(segments)) OccsegError ERANGE."""
@@ -101,9 +155,13 @@ class Result(Owned):
             raise OccsegError(Status.EINTERNAL, f"result dims {self.dims} do not match the input shape {self.shape}")
         self.voxel_size = voxel_size
         self.origin = tuple(origin)
-        self.labels = self._copy_out(h, lib.occseg_result_labels, np.uint32)
-        self.labels.flags.writeable = False  # mask() and voxels() rely on it; copy to modify
-        self.segments = [self._segment(h, i) for i in range(lib.occseg_result_segment_count(h))]
+        # mask() and voxels() rely on the labels being read-only; copy them to modify
+        self._labels = self._in_place(h, "occseg_result_labels_view", lib.occseg_result_labels, np.uint32)
+        self._labels_after_recycle = None  # a weak reference, once recycle() let the labels go
+        if has("occseg_result_segments_view"):
+            self._segments = None  # the table is read in place on first access (segments)
+        else:
+            self._segments = [self._segment(h, i) for i in range(lib.occseg_result_segment_count(h))]
         self.timings = {}
         for i in range(lib.occseg_result_stage_count(h)):
             name, seconds = ctypes.c_char_p(), ctypes.c_double()
@@ -115,6 +173,70 @@ class Result(Owned):
         check(fn(h, out.ctypes.data, out.size))
         return out
 
+    def _in_place(self, h, view_fn, copy_fn, dtype):
+        """A read-only array over the C result's memory (kept alive by the array), or with a
+        library that has no view function, a read-only copy."""
+        if not has(view_fn):
+            out = self._copy_out(h, copy_fn, dtype)
+            out.flags.writeable = False
+            return out
+        address, count = ctypes.c_void_p(), ctypes.c_size_t()
+        check(getattr(lib, view_fn)(h, ctypes.byref(address), ctypes.byref(count)))
+        if count.value != int(np.prod(self.shape)) or not address.value:
+            raise OccsegError(Status.EINTERNAL, f"{view_fn} gave {count.value} values for shape {self.shape}")
+        return np.asarray(Borrow(self._h, address.value, self.shape, np.dtype(dtype).str))
+
+    @property
+    def segments(self):
+        """The segment table (Segments, index == id), read from the C result on first access:
+        80 bytes per segment held with the result from then on (a call that only needs labels
+        never makes it). Made by close() and recycle() too, so it stays usable after them."""
+        segments = self._segments
+        if segments is None:
+            segments = self._segments = Segments(self._call(self._table))
+        return segments
+
+    def close(self):
+        if self._segments is None and not self.closed:
+            try:
+                self.segments  # stays usable after close(), like labels
+            except (ValueError, OccsegError, MemoryError):
+                pass  # closed meanwhile by another thread, or out of memory: it is then unavailable
+        super().close()
+
+    @property
+    def labels(self):
+        """Segment id per voxel (uint32, the input's shape), read-only, over the C result's memory."""
+        labels = self._labels
+        if labels is None:
+            labels = self._labels_after_recycle() if self._labels_after_recycle is not None else None
+            if labels is None:
+                raise ValueError("occseg.Result: the labels went back to the context with recycle(); "
+                                 "hold result.labels before recycling to keep them (the result is then freed, "
+                                 "not recycled, once they go)")
+        return labels
+
+    def _let_go(self):
+        """Drops the result's own reference to its labels (for Context.recycle): the array dies
+        now unless the caller holds it, which then keeps the C result from being recycled."""
+        if not self.closed:
+            segments = self.segments
+            if isinstance(segments, Segments):
+                self._segments = segments._detached()  # a copy of the table: its view would hold the result
+        labels, self._labels = self._labels, None
+        if labels is not None and self._labels_after_recycle is None:
+            self._labels_after_recycle = weakref.ref(labels)
+
+    def _table(self, h):
+        """The C result's segment table as a read-only structured array over its memory."""
+        address, count = ctypes.c_void_p(), ctypes.c_size_t()
+        check(lib.occseg_result_segments_view(h, ctypes.byref(address), ctypes.byref(count)))
+        dtype = np.dtype(SegmentInfo)
+        if count.value == 0:
+            return np.zeros(0, dtype)
+        raw = np.asarray(Borrow(self._h, address.value, (count.value * dtype.itemsize,), "|u1"))
+        return raw.view(dtype)
+
     @staticmethod
     def _segment(h, index):
         info = SegmentInfo(struct_size=ctypes.sizeof(SegmentInfo))
@@ -123,8 +245,10 @@ class Result(Owned):
                        (tuple(info.bbox_min), tuple(info.bbox_max)), tuple(info.centroid))
 
     def states(self):
-        """The state (State value) of each voxel, uint8, the shape of labels."""
-        return self._call(self._copy_out, lib.occseg_result_states, np.uint8)
+        """The state (State value) of each voxel, uint8, the shape of labels: a read-only array
+        over memory of the C result (made on the first call, 1 byte per voxel, kept with the
+        result), which it keeps alive like `labels`. ValueError once the result is closed."""
+        return self._call(self._in_place, "occseg_result_states_view", lib.occseg_result_states, np.uint8)
 
     # What write() writes: the files of `occseg segment` that liboccseg itself can write (the
     # pictures and segments.ot need libpng and OctoMap, which only the command links).

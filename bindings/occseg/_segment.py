@@ -6,7 +6,7 @@ from ._args import flag, text_bytes
 from ._context import Context
 from ._errors import OccsegError, OccsegTypeError, Status, check
 from ._handles import Owned
-from ._lib import PROGRESS_FN, lib
+from ._lib import PROGRESS_FN, has, lib
 from ._map import Map, as_voxel_array, map_dims, map_origin, map_voxel_size
 from ._params import set_param
 from ._result import Result
@@ -49,7 +49,9 @@ def segment(probabilities, preset="default", threads=0, *, voxel_size=None, orig
 
     probabilities: NumPy array indexed [z, y, x] (or [y, x]) of float32, float64, uint8 or uint16
         (0..max meaning 0..1), or int8 read as a ROS OccupancyGrid (-1 unknown, 0..100 percent;
-        see Map.from_array), any strides: it is read in place, not copied. Or an occseg.Map.
+        see Map.from_array), any strides: it is read in place, not copied (Map.view; a dense
+        float32 array with no copy at all, other dtypes and layouts converted by the call into a
+        temporary float32 array it frees). Or an occseg.Map.
     preset: "default" (paper plus per-voxel safety rules) or "paper" (as published).
     threads: worker threads, 0 = all cores; results never depend on it.
     voxel_size, origin: of an array input (default 1 and (0, 0, 0)); a Map carries its own.
@@ -60,7 +62,8 @@ def segment(probabilities, preset="default", threads=0, *, voxel_size=None, orig
         same result, without starting threads on every call.
     **params: any parameter of occseg.param_table(), e.g. smax=32, split_ratio=1.2.
 
-    Returns a Result. Raises OccsegError for bad input, naming the problem.
+    Returns a Result, whose labels (and states()) are read-only arrays over the C result's memory,
+    kept alive by them. Raises OccsegError for bad input, naming the problem.
 
     A Map or context closed while this runs (by another thread, or by `progress`) is freed only
     once the C call has returned; this call finishes normally."""
@@ -79,8 +82,10 @@ def segment(probabilities, preset="default", threads=0, *, voxel_size=None, orig
         shape = None  # the map's, read under the use below
     else:
         arr = as_voxel_array(probabilities, "occseg.segment")
-        m = Map.from_array(arr, 1.0 if voxel_size is None else voxel_size, origin,
-                           clamp=clamp, nan_unknown=nan_unknown)
+        # Read where it lies (Map.view keeps the array alive while the map views it); a library
+        # without occseg_map_view_buffer gets a copy.
+        make = Map.view if has("occseg_map_view_buffer") else Map.from_array
+        m = make(arr, 1.0 if voxel_size is None else voxel_size, origin, clamp=clamp, nan_unknown=nan_unknown)
         temporary = True
         shape = arr.shape  # [y, x] inputs get [y, x] labels
     p = None

@@ -33,5 +33,6 @@ int run_result_tests(void);
 int run_context_tests(void);
 int run_reader_options_tests(void);
 int run_boxes_tests(void);
+int run_borrow_tests(void);
 
 #endif

@@ -66,11 +66,13 @@ def test_recycled_result_is_closed_its_data_kept_and_later_results_right():
     before = occseg.live_handles().get("result", 0)
     with occseg.Context(2) as ctx:
         r = occseg.segment(m, context=ctx)
-        labels = r.labels
+        labels = r.labels.copy()
         ctx.recycle(r)
         assert r.closed
         assert occseg.live_handles().get("result", 0) == before  # handed over, not leaked
-        assert np.array_equal(r.labels, plain.labels) and r.labels is labels  # Python copies stay
+        assert np.array_equal(labels, plain.labels) and r.segments == plain.segments  # Python data stays
+        with pytest.raises(ValueError):
+            r.labels  # the array over the memory handed back (test_in_place.py: held, it is not recycled)
         with pytest.raises(ValueError):
             r.states()
         ctx.recycle(r)  # already closed: ignored

@@ -26,6 +26,8 @@
  *     the parameters at its start, so the object may be changed or freed once it has returned.
  *   - occseg_last_error() is per thread: it describes the last failing call of the calling thread.
  *   - The progress callback is called on the thread that called occseg_segment().
+ *   - A map made by occseg_map_view_buffer reads the caller's buffer during every call on it: the
+ *     buffer must stay alive and must not be written while any call uses the map (see there).
  *   - No handle may be freed (or a result recycled) while a call uses it: not from another
  *     thread, and not from inside the progress callback of an occseg_segment() or
  *     occseg_context_segment() that uses that map or context; the call would read freed memory.
@@ -276,10 +278,13 @@ typedef enum { OCCSEG_FREE = 0, OCCSEG_UNKNOWN = 1, OCCSEG_OCCUPIED = 2 } occseg
  * callback cancels, OCCSEG_ENOMEM when memory runs out. */
 OCCSEG_API int occseg_segment(occseg_result **out, const occseg_map *map, const occseg_params *params);
 
-/* A caller-owned context: a small pool of worker threads kept between calls. occseg_segment()
- * starts and joins threads inside every parallel stage (about 30 times per call); a program that
- * segments maps again and again (a robot re-segmenting its map at a few hertz) runs them on a
- * context instead. There is no global state: contexts are independent of each other. */
+/* A caller-owned context: a small pool of worker threads kept between calls, and (with
+ * occseg_context_recycle) the label array of a result handed back. occseg_segment() itself runs
+ * on a pool leased from a few idle pools the library keeps for the process (one call per pool at
+ * a time: concurrent calls never wait for each other; abandoned in a fork()ed child, joined at
+ * exit); nothing else is kept between its calls. A program that segments maps again and again (a
+ * robot re-segmenting its map at a few hertz) may also run them on a context of its own, which
+ * can recycle results. Contexts are independent of each other. */
 typedef struct occseg_context occseg_context;
 
 /* Starts a context with `threads` threads in all (the calling thread included; 0: one per
@@ -612,6 +617,54 @@ OCCSEG_API int occseg_result_segment_box(const occseg_result *result, uint32_t i
  * it, before anything is written. All or nothing, exactly as occseg_result_write (creates `dir`,
  * not its parents; on failure every file in `dir` is as it was). */
 OCCSEG_API int occseg_result_write_outputs(const occseg_result *result, const char *dir, const char *const *names);
+
+/* ========================================================================================== */
+/*  Borrowed buffers: maps that view the caller's array, results read in place                */
+/* ========================================================================================== */
+
+/* Makes a map that reads the caller's buffer where it lies, instead of copying it as
+ * occseg_map_from_buffer_flags does. The arguments, their checks and their status codes are
+ * those of occseg_map_from_buffer_flags (strides in bytes, NULL: dense with x fastest; any
+ * occseg_dtype; the import flags), except that the values are not read here: they are checked
+ * as a call reads them, and a bad one fails that call (occseg_segment, occseg_context_segment,
+ * occseg_map_values, occseg_map_write) with the status and the text occseg_map_from_buffer_flags
+ * gives for the same buffer ("data: probability at voxel (x, y, z) = ... is NaN ...").
+ *
+ * Lifetime: the map refers to `data`; it holds no copy. The caller keeps the buffer alive, and
+ * its values unchanged, from this call until occseg_map_free(map); writing into it while a call
+ * reads the map is a data race, and freeing it first leaves the map dangling (any later use reads
+ * freed memory). Results do not refer to the map or the buffer: they may outlive both.
+ *
+ * Cost: a dense float32 buffer with x fastest (a C-order NumPy float32 array [z, y, x]) is read
+ * by the pipeline itself, in its first pass, with no copy at all. Any other dtype or layout is
+ * converted for each call that reads it into a temporary float array that the call frees (4 bytes
+ * per voxel during the call, nothing between calls); so is a float32 buffer under import flags
+ * when it holds a value the flags must change (it is first scanned for one). */
+OCCSEG_API int occseg_map_view_buffer(occseg_map **out, const void *data, occseg_dtype dtype,
+                                      const size_t dims[3] /* nx, ny, nz */,
+                                      const ptrdiff_t strides[3] /* bytes; NULL: dense, x fastest */,
+                                      double voxel_size, uint32_t flags);
+
+/* The result's labels where they lie: `*out` receives a pointer to its nx * ny * nz uint32
+ * labels (x fastest) and `*count` their number, without a copy. The pointer stays valid, and
+ * the labels unchanged, until the result is freed (occseg_result_free) or recycled
+ * (occseg_context_recycle); it must not be used after that. On failure (a NULL argument:
+ * OCCSEG_EINVAL) `*out` is set to NULL and `*count` to 0 where they are not NULL. */
+OCCSEG_API int occseg_result_labels_view(const occseg_result *result, const uint32_t **out, size_t *count);
+
+/* The voxels' states (occseg_state values, uint8, x fastest) as an array the result owns: made
+ * on the first call (1 byte per voxel, kept with the result; several threads may ask at once),
+ * then returned as it is. Valid, like the labels view, until the result is freed or recycled.
+ * OCCSEG_ENOMEM if the array cannot be made (a later call tries again). */
+OCCSEG_API int occseg_result_states_view(const occseg_result *result, const uint8_t **out, size_t *count);
+
+/* The segment table as an array the result owns: `*count` entries, entry i as
+ * occseg_result_segment(result, i, ...) fills it (struct_size = sizeof(occseg_segment_info) of
+ * this library; padding bytes zero), made on the first call (once, as above) and kept with the
+ * result; valid until the result is freed or recycled. For bindings that read the whole table at
+ * once. OCCSEG_ENOMEM if it cannot be made (a later call tries again). */
+OCCSEG_API int occseg_result_segments_view(const occseg_result *result, const occseg_segment_info **out,
+                                           size_t *count);
 
 #ifdef __cplusplus
 } /* extern "C" */

@@ -19,6 +19,11 @@ struct Grid {
   double voxel_size = 1.0;                   // metres per voxel edge
   std::array<double, 3> origin{0, 0, 0};     // world position of the corner of voxel (0, 0, 0)
   std::vector<float> p;
+  // A caller's dense float array of dims.count() probabilities, x fastest, that the grid reads
+  // instead of `p` (then empty): set only by a map that borrows its buffer (the C ABI's
+  // occseg_map_view_buffer). Its owner keeps it alive and unchanged while the grid is in use.
+  // Copying the Grid copies the pointer, not the values.
+  const float* borrowed = nullptr;
 
   Grid() = default;
   // Allocates nx*ny*nz voxels at `fill`. Throws Error(bad_dims) on zero or overflowing dims.
@@ -27,7 +32,11 @@ struct Grid {
   std::size_t index(std::size_t x, std::size_t y, std::size_t z) const {
     return x + dims.nx * (y + dims.ny * z);
   }
-  float at(std::size_t x, std::size_t y, std::size_t z) const { return p[index(x, y, z)]; }
+  // The probabilities, wherever they are: what every stage reads.
+  const float* values() const { return borrowed ? borrowed : p.data(); }
+  // Number of values values() holds.
+  std::size_t value_count() const { return borrowed ? dims.count() : p.size(); }
+  float at(std::size_t x, std::size_t y, std::size_t z) const { return values()[index(x, y, z)]; }
   float& at(std::size_t x, std::size_t y, std::size_t z) { return p[index(x, y, z)]; }
 };
 

@@ -30,15 +30,16 @@ bool probabilities_in_range(const float* p, std::size_t n) { return kernels::act
 
 void check_probabilities(const Grid& g) {
   check_dims(g.dims);
-  if (g.p.size() != g.dims.count())
-    throw Error(Status::invalid_argument, "grid holds " + std::to_string(g.p.size()) +
+  if (g.value_count() != g.dims.count())
+    throw Error(Status::invalid_argument, "grid holds " + std::to_string(g.value_count()) +
                                               " values for " + std::to_string(g.dims.count()) +
                                               " voxels");
   if (!(g.voxel_size > 0) || !std::isfinite(g.voxel_size))
     throw Error(Status::bad_value, "voxel size " + std::to_string(g.voxel_size) +
                                        " is not a positive finite number");
-  for (std::size_t i = 0; i < g.p.size(); ++i) {
-    const float v = g.p[i];
+  const float* const p = g.values();
+  for (std::size_t i = 0; i < g.value_count(); ++i) {
+    const float v = p[i];
     if (!(v >= 0.0f && v <= 1.0f)) {  // also catches NaN
       const std::size_t x = i % g.dims.nx, y = (i / g.dims.nx) % g.dims.ny,
                         z = i / (g.dims.nx * g.dims.ny);

@@ -28,6 +28,7 @@
 #include "pipeline/map_pass.hpp"
 #include "pipeline/label_scratch.hpp"
 #include "pipeline/segment_internal.hpp"
+#include "pipeline/shared_pools.hpp"
 
 namespace occseg {
 
@@ -83,14 +84,14 @@ void release_freed_memory() {
 // fewer).
 void check_map(const Grid& grid, int threads, bool values, const kernels::Table& k) {
   check_dims(grid.dims);
-  bool ok = grid.p.size() == grid.dims.count() && grid.voxel_size > 0 && std::isfinite(grid.voxel_size);
+  bool ok = grid.value_count() == grid.dims.count() && grid.voxel_size > 0 && std::isfinite(grid.voxel_size);
   if (ok && values) {
-    const std::size_t chunk = std::size_t(1) << 18, n = grid.p.size();
+    const std::size_t chunk = std::size_t(1) << 18, n = grid.value_count();
     const std::size_t chunks = (n + chunk - 1) / chunk;
     std::vector<std::uint8_t> good(chunks, 0);
     parallel_for(chunks, threads, [&](std::size_t c0, std::size_t c1) {
       for (std::size_t c = c0; c < c1; ++c)
-        good[c] = k.texture.values_in_range(grid.p.data() + c * chunk, std::min(chunk, n - c * chunk));
+        good[c] = k.texture.values_in_range(grid.values() + c * chunk, std::min(chunk, n - c * chunk));
     });
     for (auto g : good) ok = ok && g;
   }
@@ -100,15 +101,16 @@ void check_map(const Grid& grid, int threads, bool values, const kernels::Table&
 }  // namespace
 
 Result segment(const Grid& grid, const Params& params, bool keep_stages) {
-  // Without a caller's context, one pool for this call: its 20-odd parallel loops would otherwise
-  // each start their threads (measured by bench/bench_pipeline.cpp's
-  // BM_ParallelForDispatch). The call stays self-contained: the pool ends with it.
-  // (No Workspace: the call's bit arrays are freed before the labelling's peak, as without a pool.)
+  // Without a caller's context, a pool for this call: its 20-odd parallel loops would otherwise
+  // each start their threads (measured by bench/bench_pipeline.cpp's BM_ParallelForDispatch). It
+  // is leased from the process's idle pools (shared_pools.hpp), so that a one-shot call does not
+  // start and join threads either; nothing else is kept between calls (no Workspace, no label
+  // array: the call's bit arrays are freed before the labelling's peak, as without a pool).
   params.validate();
   if (!pool_installed() && resolve_threads(params.threads) > 1) {
-    Context pool(params.threads);
+    detail::PoolLease pool(params.threads);
     Result r;
-    pool.run([&] { r = segment_into(grid, params, keep_stages, LabelArray()); });
+    pool.context().run([&] { r = segment_into(grid, params, keep_stages, LabelArray()); });
     return r;
   }
   return segment_into(grid, params, keep_stages, LabelArray());

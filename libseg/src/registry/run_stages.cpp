@@ -27,7 +27,7 @@ occseg_plugin_grid grid_view(const Grid& g) {
   v.dims[0] = g.dims.nx;
   v.dims[1] = g.dims.ny;
   v.dims[2] = g.dims.nz;
-  v.values = g.p.data();
+  v.values = g.values();
   v.voxel_size = g.voxel_size;
   for (int k = 0; k < 3; ++k) v.origin[k] = g.origin[k];
   return v;

@@ -26,7 +26,7 @@ double mean_occupancy(const Grid& grid, const Block& b) {
         double part = 0;
         for (std::uint32_t z = std::max(cz, b.lo[2]); z < std::min(cz + k, b.hi[2]); ++z)
           for (std::uint32_t y = std::max(cy, b.lo[1]); y < std::min(cy + k, b.hi[1]); ++y) {
-            const float* row = grid.p.data() + grid.index(0, y, z);
+            const float* row = grid.values() + grid.index(0, y, z);
             for (std::uint32_t x = std::max(cx, b.lo[0]); x < std::min(cx + k, b.hi[0]); ++x) part += row[x];
           }
         sum += part;
@@ -76,7 +76,7 @@ void detail::CellRows::add_row(std::size_t y, std::size_t z) {
   constexpr std::size_t c = kMeanCell;
   static_assert(kMeanCell == 8, "add_cells adds eight voxels per cell");
   const std::size_t nx = grid_->dims.nx, i0 = nx * (y + grid_->dims.ny * z);
-  const float* const row = grid_->p.data() + i0;
+  const float* const row = grid_->values() + i0;
   if (own_) {
     k_->own_states(row, nx, lo_, hi_, own_ + i0);
   } else if (unknown_ && occupied_) {  // the own states as bits only, straight from the values
@@ -123,7 +123,7 @@ void create_by_blocks(const Grid& grid, const std::vector<Block>& blocks, const 
         for (std::uint32_t z = blk.lo[2]; z < blk.hi[2]; ++z)
           for (std::uint32_t y = blk.lo[1]; y < blk.hi[1]; ++y) {
             const std::size_t at = grid.index(blk.lo[0], y, z);
-            kern.own_states(grid.p.data() + at, width, lo, hi, own + at);
+            kern.own_states(grid.values() + at, width, lo, hi, own + at);
           }
       const auto s = static_cast<std::uint8_t>(params.state_of(mean_occupancy(grid, blk)));
       for (std::uint32_t z = blk.lo[2]; z < blk.hi[2]; ++z)

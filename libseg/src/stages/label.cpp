@@ -595,7 +595,7 @@ void label_states(const std::uint8_t* s, const std::function<void()>& release, c
   labelling.forget_states();
   if (release) release();
   // Then the segment table.
-  labelling.segment_table(g.p.data(), segments, threads);
+  labelling.segment_table(g.values(), segments, threads);
 }
 
 }  // namespace

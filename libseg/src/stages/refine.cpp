@@ -297,13 +297,13 @@ void detail::float_bounds(double below, double above, float& lo, float& hi) {
 
 std::vector<std::uint8_t> own_states(const Grid& g, const Params& params) {
   std::vector<std::uint8_t> own;
-  resize_huge(own, g.p.size());
+  resize_huge(own, g.value_count());
   float lo, hi;
   detail::float_bounds(params.free_below, params.occupied_above, lo, hi);
   const std::size_t chunk = 1 << 16;
   parallel_for((own.size() + chunk - 1) / chunk, params.threads, [&](std::size_t c0, std::size_t c1) {
     const std::size_t b = c0 * chunk, e = std::min(own.size(), c1 * chunk);
-    detail::own_states_of(g.p.data() + b, e - b, lo, hi, own.data() + b);
+    detail::own_states_of(g.values() + b, e - b, lo, hi, own.data() + b);
   });
   return own;
 }

@@ -109,7 +109,7 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz;
   const Stencil sten = stencil(d);
   const bool full = sten.present == 63;  // all six neighbours: the row kernels for them
-  const float* p = grid.p.data();
+  const float* p = grid.values();
   // Pass 1: the parked step of every interior voxel, in the code array, and the distribution of
   // the non-zero contrasts (per-thread histograms summed in thread order: integer counts, so the
   // total is exact whoever counted what). Threads take groups of planes from a shared counter (a
