@@ -90,9 +90,7 @@ class Map(Owned):
         try:
             check(lib.occseg_map_from_buffer_flags(ctypes.byref(out), data, dtype, dims, strides, vs, flags))
         except OccsegError as e:
-            if e.status != Status.EVALUE or "OCCSEG_IMPORT_" not in e.message:
-                raise
-            raise OccsegError(e.code, _python_flags(e.message)) from None
+            raise python_flag_error(e) from None
         return _configured(cls(out), None, o)
 
     @classmethod
@@ -110,8 +108,9 @@ class Map(Owned):
         arr = as_voxel_array(probabilities, "occseg_map_view_buffer")
         vs = real("occseg.Map.view", "voxel_size", voxel_size)
         o = None if origin is None else _origin_arg("occseg.Map.view", origin)
+        flags = (_IMPORT_CLAMP if flag("occseg.Map.view", "clamp", clamp) else 0) | \
+            (_IMPORT_NAN_UNKNOWN if flag("occseg.Map.view", "nan_unknown", nan_unknown) else 0)
         data, dtype, dims, strides = buffer_args(arr)
-        flags = (_IMPORT_CLAMP if clamp else 0) | (_IMPORT_NAN_UNKNOWN if nan_unknown else 0)
         out = ctypes.c_void_p()
         check(lib.occseg_map_view_buffer(ctypes.byref(out), data, dtype, dims, strides, vs, flags))
         m = cls.__new__(cls)
@@ -183,6 +182,14 @@ class Map(Owned):
                         f"origin={map_origin(h)}>")
         except ValueError:
             return "<occseg.Map closed>"
+
+
+def python_flag_error(e):
+    """`e` again, with the keywords of the import flags in place of their C names when the error is
+    one that only such a flag accepts (else `e` itself)."""
+    if e.status != Status.EVALUE or "OCCSEG_IMPORT_" not in e.message:
+        return e
+    return OccsegError(e.code, _python_flags(e.message))
 
 
 def _python_flags(message):

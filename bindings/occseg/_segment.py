@@ -7,7 +7,7 @@ from ._context import Context
 from ._errors import OccsegError, OccsegTypeError, Status, check
 from ._handles import Owned
 from ._lib import PROGRESS_FN, has, lib
-from ._map import Map, as_voxel_array, map_dims, map_origin, map_voxel_size
+from ._map import Map, as_voxel_array, map_dims, map_origin, map_voxel_size, python_flag_error
 from ._params import set_param
 from ._result import Result
 
@@ -110,7 +110,14 @@ def segment(probabilities, preset="default", threads=0, *, voxel_size=None, orig
                 else:
                     rc = lib.occseg_context_segment(ctypes.byref(out), ch, mh, ph)
                 if cb.error is None:
-                    check(rc)  # here: the deferred frees at the end of the uses come after the text is read
+                    try:
+                        check(rc)  # here: the deferred frees at the end of the uses come after the text is read
+                    except OccsegError as e:
+                        if not temporary:
+                            raise
+                        # An array viewed by this call: its values are checked as the pipeline reads
+                        # them, so name the keywords (clamp=True, ...), as Map.from_array does.
+                        raise python_flag_error(e) from None
         if cb.error is not None:
             lib.occseg_result_free(out)  # NULL after a cancel; freed anyway should it ever not be
             raise cb.error

@@ -72,7 +72,7 @@ using FileList = std::vector<std::pair<std::string, Writer>>;
 // The outputs, in the order written: a name and its writer. Out of line: GCC 12 inlines the
 // vector's growth into run() and then warns wrongly (-Warray-bounds) about its empty array.
 [[gnu::noinline]] void add_file(FileList& files, const char* name, Writer write) {
-  add_file(files, name, std::move(write));
+  files.emplace_back(name, std::move(write));
 }
 
 int run(const SegmentArgs& o) {
