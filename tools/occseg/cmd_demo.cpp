@@ -126,7 +126,9 @@ int run(const DemoArgs& o) {
                                 map, r, &truth.state, &staged);
        }},
       {"labels.npy", [&](const std::string& f, StagedFiles& s) { write_labels_npy(f, r.dims, r.labels, &s); }},
-      {"labels.nrrd", [&](const std::string& f, StagedFiles& s) { write_labels_nrrd(f, map, r.labels, "", &s); }},
+      {"labels.nrrd", [&](const std::string& f, StagedFiles& s) { NrrdWriteOptions gz;
+         gz.gzip = true;
+         write_labels_nrrd(f, map, r.labels, "", &s, gz); }},
       {"segments.json",
        [&](const std::string& f, StagedFiles& s) {
          write_file_atomically(f, [&](std::ostream& os) { write_segments_json(os, r, preset); }, &s);

@@ -1,9 +1,12 @@
 // `occseg segment IN --out DIR`: segment a map (.npy .nrrd .pcd .graph .bt .ot, see map_input)
-// and write labels.npy, labels.nrrd, segments.json and segmentation.png, plus map.nrrd for inputs
-// that were not grids, segments.pcd for point clouds and segmentation.pgm + segmentation.yaml (a
-// map_server map) for 2D maps (nz = 1); then a summary on stdout (text or --json). All outputs or
-// none (OutputSet): until every file is complete the old files of DIR stay as they were; a
-// failure, out of memory or Ctrl-C removes the new files' temporaries.
+// and write its outputs (kOutputs: a compact set by default, the rest on request with --outputs);
+// then a summary on stdout (text or --json). All outputs or none (OutputSet): until every file is
+// complete the old files of DIR stay as they were; a failure, out of memory or Ctrl-C removes the
+// new files' temporaries. Files of kOutputs's names that an earlier run left in DIR and this run
+// did not write are removed in the same commit, so DIR then holds this run's set only.
+#include <sys/stat.h>
+
+#include <algorithm>
 #include <chrono>
 #include <iostream>
 #include <memory>
@@ -31,6 +34,7 @@ namespace {
 
 struct SegmentArgs {
   std::string input, out_dir;
+  std::string outputs = "default";
   PipelineArgs pipeline;
   InputArgs in;
   ReportArgs report;
@@ -45,13 +49,85 @@ std::string base_name(const std::string& path) {
   return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
+// Every file `occseg segment` can write, the order of writing. `by_default`: written without
+// --outputs; the others on request (--outputs NAME,... or all). The names are also what a later
+// run into the same DIR removes when it does not write them again.
+struct OutputInfo {
+  const char* name;
+  bool by_default;
+  const char* when;  // for whom it applies, in --help and in the error for one that does not
+};
+constexpr OutputInfo kOutputs[] = {
+    {"labels.nrrd", true, "always"},          // segment id per voxel, gzip-encoded NRRD (issue 27)
+    {"segments.json", true, "always"},
+    {"segmentation.png", true, "always"},
+    {"segmentation.pgm", true, "2D maps (nz = 1)"},
+    {"segmentation.yaml", true, "2D maps (nz = 1)"},
+    {"labels.npy", false, "always"},          // on request
+    {"map.nrrd", false, "inputs that are not grids (.pcd .graph .bt .ot .yaml)"},  // on request
+    {"segments.pcd", false, ".pcd/.graph inputs"},                                 // on request
+};
+
+std::string output_names() {
+  std::string s;
+  for (const OutputInfo& o : kOutputs) s += (s.empty() ? "" : ", ") + std::string(o.name);
+  return s;
+}
+
+const OutputInfo* find_output(const std::string& name) {
+  for (const OutputInfo& o : kOutputs)
+    if (name == o.name) return &o;
+  return nullptr;
+}
+
+// --outputs LIST: file names of kOutputs, `default` (the default set) and `all` (every output
+// that applies to the input), comma-separated. Error(invalid_argument), exit 1, for any other.
+struct OutputChoice {
+  bool all = false, defaults = false;
+  std::vector<std::string> names;
+};
+OutputChoice parse_outputs(const std::string& list) {
+  OutputChoice c;
+  std::size_t at = 0;
+  for (;;) {
+    const std::size_t comma = list.find(',', at);
+    std::string item = list.substr(at, comma == std::string::npos ? std::string::npos : comma - at);
+    item.erase(0, item.find_first_not_of(" \t"));
+    item.erase(item.find_last_not_of(" \t") + 1);
+    if (item == "all") c.all = true;
+    else if (item == "default") c.defaults = true;
+    else if (find_output(item)) c.names.push_back(item);
+    else
+      throw Error(Status::invalid_argument,
+                  "--outputs: " + (item.empty() ? std::string("an empty name") : "'" + item + "'") +
+                      " is not an output of occseg segment (" + output_names() + ", default or all)");
+    if (comma == std::string::npos) break;
+    at = comma + 1;
+  }
+  return c;
+}
+
+// The same file (device and inode), so that an input that lives in DIR under an output's name is
+// never removed as an earlier run's file.
+bool same_file(const std::string& a, const std::string& b) {
+  struct stat sa {}, sb {};
+  return ::stat(a.c_str(), &sa) == 0 && ::stat(b.c_str(), &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
+bool is_regular_file(const std::string& p) {
+  struct stat st {};
+  return ::lstat(p.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+
 int run(const SegmentArgs& o) {
   install_interrupt_handlers();  // Ctrl-C cancels through the progress callbacks
+  const OutputChoice choice = parse_outputs(o.outputs);  // a usage error before the long part
   Params params = make_params(o.pipeline);
   ProgressBar bar(stderr_is_terminal() && !o.report.quiet);
   params.progress = bar.segment_callback();
   MapInputOptions in = make_input_options(o.in, o.pipeline.threads);
   in.progress = bar.callback("fusing scans");
+  in.read_progress = bar.callback("reading " + base_name(o.input));
   OutputSet out(o.out_dir);  // first, so an unusable directory fails before the long part
 
   std::vector<StageTime> steps;
@@ -66,40 +142,85 @@ int run(const SegmentArgs& o) {
 
   t = std::chrono::steady_clock::now();
   const std::string preset = preset_name(params.preset);
-  std::vector<std::pair<std::string, std::function<void(const std::string&, StagedFiles&)>>> files;
-  files.emplace_back("labels.npy",
-                     [&](const std::string& f, StagedFiles& s) { write_labels_npy(f, r.dims, r.labels, &s); });
+  // Each output: its name, whether it applies to this input, and its writer (given the progress
+  // of its own bytes, 0..1).
+  using Writer = std::function<void(const std::string&, StagedFiles&, const IoProgress&)>;
+  struct Output {
+    std::string name;
+    bool applies;
+    Writer write;
+  };
+  const bool map2d = grid.dims.nz == 1;
+  std::vector<std::uint8_t> states;  // for the 2D pair, made only when it is written
+  NrrdWriteOptions gz;
+  gz.gzip = true;
+  gz.threads = o.pipeline.threads;
+  std::vector<Output> files;
   // In the input's space (an LPS volume's labels in LPS, lying on it in 3D Slicer).
-  files.emplace_back("labels.nrrd", [&](const std::string& f, StagedFiles& s) {
-    write_labels_nrrd(f, grid, r.labels, input.nrrd_space, &s);
-  });
-  if (input.kind != InputKind::volume)
-    files.emplace_back("map.nrrd", [&](const std::string& f, StagedFiles& s) { write_grid_nrrd(f, grid, "", &s); });
-  if (input.kind == InputKind::cloud && have_pcl())
-    files.emplace_back("segments.pcd",
-                       [&](const std::string& f, StagedFiles& s) { write_cloud_output(f, grid, r, &s); });
-  std::vector<std::uint8_t> states;
-  if (grid.dims.nz == 1) {  // a 2D map: also as the PGM/YAML pair map_server (a 2D planner) loads
-    states = voxel_states(r);
-    files.emplace_back("segmentation.pgm",
-                       [&](const std::string& f, StagedFiles& s) { write_state_pgm(f, grid.dims, states, &s); });
-    files.emplace_back("segmentation.yaml", [&](const std::string& f, StagedFiles& s) {
-      write_map_yaml(f, "segmentation.pgm", grid, &s);
-    });
+  files.push_back({"labels.nrrd", true, [&](const std::string& f, StagedFiles& s, const IoProgress& p) {
+                     NrrdWriteOptions w = gz;
+                     w.progress = p;
+                     write_labels_nrrd(f, grid, r.labels, input.nrrd_space, &s, w);
+                   }});
+  files.push_back({"segments.json", true, [&](const std::string& f, StagedFiles& s, const IoProgress&) {
+                     write_file_atomically(f, [&](std::ostream& os) { write_segments_json(os, r, preset); }, &s);
+                   }});
+  files.push_back({"segmentation.png", true, [&](const std::string& f, StagedFiles& s, const IoProgress&) {
+                     const Dims& d = grid.dims;
+                     write_segmentation_png(f,
+                                            "occseg segment " + base_name(o.input) + "  (" + std::to_string(d.nx) +
+                                                " x " + std::to_string(d.ny) + " x " + std::to_string(d.nz) +
+                                                ", preset " + preset + ")",
+                                            grid, r, nullptr, &s);
+                   }});
+  // A 2D map: also as the PGM/YAML pair map_server (a 2D planner) loads.
+  files.push_back({"segmentation.pgm", map2d, [&](const std::string& f, StagedFiles& s, const IoProgress&) {
+                     if (states.empty()) states = voxel_states(r);
+                     write_state_pgm(f, grid.dims, states, &s);
+                   }});
+  files.push_back({"segmentation.yaml", map2d, [&](const std::string& f, StagedFiles& s, const IoProgress&) {
+                     write_map_yaml(f, "segmentation.pgm", grid, &s);
+                   }});
+  files.push_back({"labels.npy", true, [&](const std::string& f, StagedFiles& s, const IoProgress&) {
+                     write_labels_npy(f, r.dims, r.labels, &s);
+                   }});
+  files.push_back({"map.nrrd", input.kind != InputKind::volume,
+                   [&](const std::string& f, StagedFiles& s, const IoProgress& p) {
+                     NrrdWriteOptions w = gz;
+                     w.progress = p;
+                     write_grid_nrrd(f, grid, "", &s, w);
+                   }});
+  files.push_back({"segments.pcd", input.kind == InputKind::cloud && have_pcl(),
+                   [&](const std::string& f, StagedFiles& s, const IoProgress&) {
+                     write_cloud_output(f, grid, r, &s);
+                   }});
+  // What to write: named ones must apply (a usage error otherwise, before anything is written).
+  for (const std::string& n : choice.names) {
+    const auto it = std::find_if(files.begin(), files.end(), [&](const Output& f) { return f.name == n; });
+    if (it != files.end() && !it->applies)
+      throw Error(Status::invalid_argument, "--outputs: " + n + " does not apply to this input (it is written for " +
+                                                find_output(n)->when + ")");
   }
-  files.emplace_back("segments.json", [&](const std::string& f, StagedFiles& s) {
-    write_file_atomically(f, [&](std::ostream& os) { write_segments_json(os, r, preset); }, &s);
-  });
-  files.emplace_back("segmentation.png", [&](const std::string& f, StagedFiles& s) {
-    const Dims& d = grid.dims;
-    write_segmentation_png(f,
-                           "occseg segment " + base_name(o.input) + "  (" + std::to_string(d.nx) + " x " +
-                               std::to_string(d.ny) + " x " + std::to_string(d.nz) + ", preset " + preset + ")",
-                           grid, r, nullptr, &s);
-  });
-  for (std::size_t k = 0; k < files.size(); ++k) {
-    bar.update("writing " + files[k].first, double(k) / double(files.size()));
-    out.write(files[k].first, files[k].second);
+  std::vector<const Output*> chosen;
+  for (const Output& f : files) {
+    const OutputInfo* info = find_output(f.name);
+    const bool named = std::find(choice.names.begin(), choice.names.end(), f.name) != choice.names.end();
+    if (f.applies && (choice.all || named || (choice.defaults && info && info->by_default))) chosen.push_back(&f);
+  }
+  for (std::size_t k = 0; k < chosen.size(); ++k) {
+    const std::string label = "writing " + chosen[k]->name;
+    const double share = 1.0 / double(chosen.size()), before = double(k) * share;
+    bar.update(label, before);
+    const IoProgress progress = [&bar, label, before, share](double f) { return bar.update(label, before + share * f); };
+    out.write(chosen[k]->name, [&](const std::string& f, StagedFiles& s) { chosen[k]->write(f, s, progress); });
+  }
+  bar.update("writing", 1.0);
+  // Files an earlier run left under an output's name, not written now: removed in the commit
+  // (regular files only; the input itself never).
+  for (const OutputInfo& info : kOutputs) {
+    const std::string p = out.path(info.name);
+    const bool written = std::any_of(chosen.begin(), chosen.end(), [&](const Output* f) { return f->name == info.name; });
+    if (!written && is_regular_file(p) && !same_file(p, o.input)) out.remove(info.name);
   }
   steps.push_back({"write", since(t)});
 
@@ -111,6 +232,7 @@ int run(const SegmentArgs& o) {
   rep.result = &r;
   rep.steps = steps;
   rep.files = out.files();
+  rep.removed = out.removed();
   rep.top = o.report.top;
   // The summary is made before the files are put in place, so running out of memory here still
   // leaves the old files; after the commit only writing it to stdout can fail.
@@ -140,6 +262,11 @@ Runner add_segment(CLI::App& app) {
                 ".graph OctoMap scan graph, .bt/.ot OctoMap tree")
       ->required();
   c->add_option("--out,-o", o->out_dir, "output directory (created if missing)")->required();
+  c->add_option("--outputs", o->outputs,
+                "comma-separated files to write: default (" + std::string("labels.nrrd, segments.json, "
+                "segmentation.png; 2D maps also segmentation.pgm + .yaml), all (every file that applies "
+                "to the input), or names among: ") + output_names())
+      ->type_name("LIST");
   add_pipeline_options(c, o->pipeline);
   add_input_options(c, o->in);
   add_report_options(c, o->report);

@@ -35,6 +35,9 @@ struct Volume {
   const std::uint8_t* states = nullptr;
   const std::uint32_t* labels = nullptr;
   bool distinct_occupied = false;
+  // Instead of `states`: the state of each label (indexed by labels[i]), so a segmentation is
+  // drawn without a state array as large as the map; only the voxels drawn are looked up.
+  const std::uint8_t* label_states = nullptr;
 };
 
 // A slice: the axis normal to it (0 x, 1 y, 2 z) and the voxel index along that axis.
@@ -71,8 +74,8 @@ int text_width(const std::string& text, int scale = 1);
 // is not 1..16 / 1..64. A panel is ceil(w / shrink) * scale pixels wide for a slice w voxels wide.
 Image render_figure(const std::vector<Volume>& rows, const std::vector<Slice>& slices, const FigureOptions& options);
 
-// Writes an 8-bit PNG (indexed colour when the image has at most 256 colours, else RGB)
-// atomically: Error(io) naming the path on failure, and no partial file. `into`: as
+// Writes an 8-bit PNG (indexed colour when the image has at most 256 colours, else RGB),
+// encoded straight into the file (no copy of it in memory), atomically: Error(io) naming the path on failure, and no partial file. `into`: as
 // write_file_atomically.
 void write_png(const std::string& path, const Image& img, StagedFiles* into = nullptr);
 

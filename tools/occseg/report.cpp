@@ -125,6 +125,11 @@ void print_summary(std::ostream& out, const RunReport& run) {
     for (const std::string& f : run.files) out << " " << f;
     out << "\n";
   }
+  if (!run.removed.empty()) {
+    out << "removed (an earlier run's, not written now):";
+    for (const std::string& f : run.removed) out << " " << f;
+    out << "\n";
+  }
 }
 
 json summary_json(const RunReport& run) {
@@ -156,7 +161,8 @@ json summary_json(const RunReport& run) {
           {"voxels", {{"free", vox[0]}, {"unknown", vox[1]}, {"occupied", vox[2]}}},
           {"largest_objects", objects},
           {"seconds", times},
-          {"files", run.files}};
+          {"files", run.files},
+          {"removed", run.removed}};
 }
 
 void write_segmentation_png(const std::string& path, const std::string& title, const Grid& grid, const Result& r,
@@ -178,10 +184,12 @@ void write_segmentation_png(const std::string& path, const std::string& title, c
     slices.push_back({1, y});
     slices.push_back({0, x});
   }
-  const std::vector<std::uint8_t> states = voxel_states(r);
+  // The state of each segment, looked up for the voxels drawn only (not a state per voxel).
+  std::vector<std::uint8_t> label_states(r.segments.size());
+  for (std::size_t i = 0; i < r.segments.size(); ++i) label_states[i] = static_cast<std::uint8_t>(r.segments[i].state);
   std::vector<render::Volume> rows;
   rows.push_back({"map", d, grid.p.data(), nullptr, nullptr, false});
-  rows.push_back({"segments", d, nullptr, states.data(), r.labels.data(), true});
+  rows.push_back({"segments", d, nullptr, nullptr, r.labels.data(), true, label_states.data()});
   if (truth_states) rows.push_back({"ideal state", d, nullptr, truth_states->data(), nullptr, false});
   render::FigureOptions o;
   o.title = title;
