@@ -4,10 +4,17 @@
 // complete the old files of DIR stay as they were; a failure, out of memory or Ctrl-C removes the
 // new files' temporaries. Files of kOutputs's names that an earlier run left in DIR and this run
 // did not write are removed in the same commit, so DIR then holds this run's set only.
+#include <sys/resource.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -119,6 +126,82 @@ bool is_regular_file(const std::string& p) {
   return ::lstat(p.c_str(), &st) == 0 && S_ISREG(st.st_mode);
 }
 
+// --- a map too large for this machine fails before it is allocated -----------------------------
+
+// Bytes per voxel of `occseg segment` at its peak: the map (4), the labels (4) and the stages'
+// scratch beyond them (docs/performance.md: at most 6 with the labels), rounded up; the fusion
+// of a cloud (5 per voxel beside the map) stays below it.
+constexpr double kBytesPerVoxel = 10;
+
+// Memory the process can still take: MemAvailable, and what RLIMIT_AS leaves above the address
+// space in use. 0 when neither is known (no check then).
+double available_bytes() {
+  double avail = 0;
+  if (std::FILE* f = std::fopen("/proc/meminfo", "r")) {
+    char line[256];
+    while (std::fgets(line, sizeof line, f))
+      if (std::strncmp(line, "MemAvailable:", 13) == 0) avail = std::strtod(line + 13, nullptr) * 1024;
+    std::fclose(f);
+  }
+  rlimit as {};
+  if (::getrlimit(RLIMIT_AS, &as) == 0 && as.rlim_cur != RLIM_INFINITY) {
+    double used = 0;
+    if (std::FILE* f = std::fopen("/proc/self/statm", "r")) {
+      unsigned long pages = 0;
+      if (std::fscanf(f, "%lu", &pages) == 1) used = double(pages) * double(::sysconf(_SC_PAGESIZE));
+      std::fclose(f);
+    }
+    const double left = std::max(0.0, double(as.rlim_cur) - used);
+    avail = avail > 0 ? std::min(avail, left) : left;
+  }
+  return avail;
+}
+
+struct SizeCheckContext {
+  std::string input;
+  enum { grid, cloud, tree } kind = grid;
+  double voxel_size = 0;  // clouds: the voxel size in use
+  std::size_t approved = 0;  // the largest count passed: a later check of the same map passes too
+};
+SizeCheckContext g_size;
+
+std::string bytes_text(double b) {
+  char t[32];
+  if (b >= 1e9) std::snprintf(t, sizeof t, "%.1f GB", b / 1e9);
+  else std::snprintf(t, sizeof t, "%.0f MB", std::ceil(b / 1e6));
+  return t;
+}
+
+void check_map_size(const Dims& d) {
+  const std::size_t n = d.count();
+  if (n <= g_size.approved) return;
+  const double need = double(n) * kBytesPerVoxel, avail = available_bytes();
+  if (avail <= 0 || need <= avail) {
+    g_size.approved = n;
+    return;
+  }
+  char activity[160];
+  current_activity(activity, sizeof activity);
+  std::string m = std::string("out of memory while ") + (*activity ? activity : "reading " + g_size.input) + ": the map has " +
+                  std::to_string(d.nx) + " x " + std::to_string(d.ny) + " x " + std::to_string(d.nz) + " = " +
+                  std::to_string(n) + " voxels, which need " + bytes_text(need) + " (" + std::to_string(int(kBytesPerVoxel)) +
+                  " bytes per voxel), and " + bytes_text(avail) + " are available";
+  // Voxels scale with the cube of the voxel size (the square for a one-layer map).
+  const double scale = std::pow(need / avail, d.nz == 1 ? 0.5 : 1.0 / 3.0) * 1.01;
+  if (g_size.kind == SizeCheckContext::cloud) {
+    char t[64];
+    const double v = g_size.voxel_size * scale, step = std::pow(10.0, std::floor(std::log10(v)) - 1);
+    std::snprintf(t, sizeof t, "%g", std::ceil(v / step) * step);
+    m += std::string(": a voxel size of ") + t + " m or more would fit (--voxel-size)";
+  } else if (g_size.kind == SizeCheckContext::tree) {
+    m += ": a voxel size " + std::to_string(static_cast<long>(std::ceil(scale))) +
+         " times the one used or more would fit (--voxel-size, a multiple of the tree's resolution)";
+  } else {
+    m += " (the file holds that many voxels: segment it on a machine with more memory, or a part of it)";
+  }
+  throw Error(Status::no_memory, m);
+}
+
 int run(const SegmentArgs& o) {
   install_interrupt_handlers();  // Ctrl-C cancels through the progress callbacks
   const OutputChoice choice = parse_outputs(o.outputs);  // a usage error before the long part
@@ -129,6 +212,16 @@ int run(const SegmentArgs& o) {
   in.progress = bar.callback("fusing scans");
   in.read_progress = bar.callback("reading " + base_name(o.input));
   OutputSet out(o.out_dir);  // first, so an unusable directory fails before the long part
+  {
+    std::string ext = o.input.substr(std::min(o.input.size(), o.input.rfind('.') == std::string::npos ? o.input.size() : o.input.rfind('.')));
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    g_size.input = base_name(o.input);
+    g_size.kind = ext == ".pcd" || ext == ".graph" ? SizeCheckContext::cloud
+                  : ext == ".bt" || ext == ".ot"   ? SizeCheckContext::tree
+                                                   : SizeCheckContext::grid;
+    g_size.voxel_size = in.voxel_size.value_or(0.05);
+    set_grid_size_check(check_map_size);
+  }
 
   std::vector<StageTime> steps;
   auto t = std::chrono::steady_clock::now();
