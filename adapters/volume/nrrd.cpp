@@ -334,6 +334,18 @@ NrrdVolume read_nrrd(const std::string& path, const IoProgress& progress) {
   if (!dimension || !have_sizes || sizes.size() != std::size_t(dimension))
     bad(path, "dimension and sizes are missing or disagree");
   v.dims = Dims{sizes[0], sizes[1], dimension == 3 ? sizes[2] : 1};
+  {
+    // Data the file cannot hold is a format error before any size check (which may refuse a map
+    // too large for the memory): raw bytes missing, or more than deflate's 1032:1 could give.
+    const double promised = double(v.dims.nx) * double(v.dims.ny) * double(v.dims.nz) * double(type_size(v.type));
+    const double have = double(b.size() - pos);
+    if (gzip && promised / 1032 > have + 64)
+      bad(path, "the " + std::to_string(b.size() - pos) + " bytes of gzip data cannot hold the " +
+                    std::to_string(static_cast<unsigned long long>(promised)) + " bytes the header promises");
+    if (!gzip && !ascii && promised > have && v.dims.count() > 0 && promised < 1e18)
+      bad(path, "truncated data: the header promises " + std::to_string(static_cast<unsigned long long>(promised)) +
+                    " bytes, the file has " + std::to_string(b.size() - pos));
+  }
   try {
     check_dims(v.dims);
   } catch (const Error& e) {
