@@ -263,15 +263,28 @@ void checked_probabilities(const Grid& g, const std::string& name) {
 
 // Reads `n` bytes of the file into `to` in pieces, reporting progress; a file that ends early
 // (it shrank since it was opened) is the truncation it is.
-void read_body(InputFile& f, unsigned char* to, std::size_t n, const std::string& name, const IoProgress& progress) {
-  constexpr std::size_t kPiece = std::size_t(1) << 24;
-  for (std::size_t at = 0; at < n;) {
+// `piece_ok` (if given) checks each piece as soon as it is read, while it is in the cache; returns
+// false when some piece failed it.
+bool read_body(InputFile& f, unsigned char* to, std::size_t n, const std::string& name, const IoProgress& progress,
+               bool (*piece_ok)(const unsigned char*, std::size_t) = nullptr) {
+  constexpr std::size_t kPiece = std::size_t(1) << 20, kReport = std::size_t(1) << 24;
+  bool ok = true;
+  for (std::size_t at = 0, reported = 0; at < n;) {
     const std::size_t want = std::min(kPiece, n - at), got = f.read(to + at, want);
+    if (piece_ok && ok) ok = piece_ok(to + at, got);
     at += got;
     if (got < want)
       fail(name, "truncated data: header promises " + std::to_string(n) + " bytes, file has " + std::to_string(at));
-    report_progress(progress, double(at) / double(n));
+    if (at - reported >= kReport || at == n) {
+      report_progress(progress, double(at) / double(n));
+      reported = at;
+    }
   }
+  return ok;
+}
+
+bool floats_in_range(const unsigned char* bytes, std::size_t n) {
+  return probabilities_in_range(reinterpret_cast<const float*>(bytes), n / sizeof(float));
 }
 
 }  // namespace
@@ -306,15 +319,17 @@ Grid read_npy_grid(const std::string& path, double voxel_size, NpyArray* header,
   check_body(a, f.size() - data_at, path);
   Grid g = npy_grid_frame(a, voxel_size, path);
   const std::size_t n = g.dims.count(), bytes = n * item_size(a.descr);
+  bool values_ok = false;
   if (a.descr == "<f4" && !a.fortran_order) {
     g.p.resize(n);
-    read_body(f, reinterpret_cast<unsigned char*>(g.p.data()), bytes, path, progress);
+    values_ok = read_body(f, reinterpret_cast<unsigned char*>(g.p.data()), bytes, path, progress, floats_in_range);
   } else {
     a.data.resize(bytes);
     read_body(f, a.data.data(), bytes, path, progress);
-    g = grid_from_npy(a, voxel_size, path);
+    g = grid_from_npy(a, voxel_size, path);  // checks the values it converts
+    values_ok = true;
   }
-  checked_probabilities(g, path);
+  if (!values_ok) checked_probabilities(g, path);  // names the first bad voxel
   if (header) {
     a.data.clear();
     a.data.shrink_to_fit();

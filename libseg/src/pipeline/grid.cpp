@@ -44,6 +44,8 @@ void check_probabilities(const Grid& g) {
   if (!(g.voxel_size > 0) || !std::isfinite(g.voxel_size))
     throw Error(Status::bad_value, "voxel size " + std::to_string(g.voxel_size) +
                                        " is not a positive finite number");
+  // The vectorised check first; the loop below only looks for the first bad voxel to name it.
+  if (probabilities_in_range(g.p.data(), g.p.size())) return;
   for (std::size_t i = 0; i < g.p.size(); ++i) {
     const float v = g.p[i];
     if (!(v >= 0.0f && v <= 1.0f)) {  // also catches NaN
