@@ -49,7 +49,7 @@ for ext in ("npy", "nrrd", "pcd", "graph", "bt", "ot"):
 # evaluate's inputs (segments.json, a simulated scene's scene.json) likewise.
 r = run("simulate", "--scene", "cube", "--dims", "32", "32", "16", "--out", "truth")
 assert r.returncode == 0, r.stderr
-r = run("segment", "truth/map.npy", "--out", "seg", "--quiet")
+r = run("segment", "truth/map.npy", "--out", "seg", "--quiet", "--outputs", "all")
 assert r.returncode == 0, r.stderr
 os.mkfifo(os.path.join(work, "fifo.json"))
 one_line_error(run("evaluate", "--truth", "truth", "--labels", "seg/labels.npy", "--segments", "fifo.json"), 2,
