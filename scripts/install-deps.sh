@@ -3,7 +3,7 @@
 # Needs root (or sudo). Safe to run again.
 set -euo pipefail
 pkgs=(build-essential cmake pkg-config git
-      libeigen3-dev libpng-dev nlohmann-json3-dev libcli11-dev
+      libeigen3-dev libpng-dev zlib1g-dev nlohmann-json3-dev libcli11-dev
       libpcl-dev liboctomap-dev
       libgtest-dev libgmock-dev libcmocka-dev libbenchmark-dev
       abigail-tools valgrind clang libclang-rt-14-dev tmux

@@ -7,12 +7,15 @@
 #include <cstring>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "occseg/error.hpp"
 #include "occseg/file_read.hpp"
+#include "occseg/io_progress.hpp"
 #include "occseg/octomap_tree.hpp"
 #include "octree_header.hpp"
+#include "octree_leaves.hpp"
 
 namespace occseg {
 
@@ -68,20 +71,38 @@ struct Walker {
   std::size_t payload = 0;  // .ot: bytes of node data before the child byte
   unsigned long nodes = 0;
 
+  // .bt: the leaves as liboctomap's readBinaryData would make them (OccupancyOcTreeBase::
+  // readBinaryNode: code 01 a free leaf at the clamping minimum, 10 an occupied leaf at the
+  // maximum, 11 a node read next that then takes its children's largest log-odds, which for a
+  // node without children is OcTreeNode::getMaxChildLogOdds of none; a root without children
+  // keeps the maximum), in its leaf iterator's order (depth first, children 0..7).
+  std::vector<octree_detail::Leaf>* leaves = nullptr;
+  float free_l = 0, occupied_l = 0, childless_l = 0;
+
   unsigned char byte() {
     if (pos >= b.size()) bad(path, "the tree data is truncated at byte " + std::to_string(pos));
     return static_cast<unsigned char>(b[pos++]);
   }
-  void binary_node(int depth) {
+  void binary_node(int depth, const std::uint16_t lo[3]) {
     if (depth >= kTreeDepth) bad(path, "the tree is deeper than " + std::to_string(kTreeDepth) + " levels");
     const unsigned bits = byte() | (unsigned(byte()) << 8);
-    int n_inner = 0;
-    for (int i = 0; i < 8; ++i) {
+    const std::uint16_t half = static_cast<std::uint16_t>(1u << (kTreeDepth - depth - 1));
+    if (bits == 0 && leaves)
+      leaves->push_back({{lo[0], lo[1], lo[2]}, std::uint8_t(kTreeDepth - depth), depth == 0 ? occupied_l : childless_l});
+    for (unsigned i = 0; i < 8; ++i) {
+      // liboctomap's bit order: of child i's two bits, bit 2i set alone is a free leaf, 2i + 1
+      // alone an occupied one.
       const unsigned code = (bits >> (2 * i)) & 3u;
-      nodes += code != 0;
-      n_inner += code == 3;
+      if (!code) continue;
+      ++nodes;
+      const std::uint16_t child[3] = {static_cast<std::uint16_t>(lo[0] + ((i & 1) ? half : 0)),
+                                      static_cast<std::uint16_t>(lo[1] + ((i & 2) ? half : 0)),
+                                      static_cast<std::uint16_t>(lo[2] + ((i & 4) ? half : 0))};
+      if (code == 3) binary_node(depth + 1, child);
+      else if (leaves)
+        leaves->push_back({{child[0], child[1], child[2]}, std::uint8_t(kTreeDepth - depth - 1),
+                           code == 1 ? free_l : occupied_l});
     }
-    for (int k = 0; k < n_inner; ++k) binary_node(depth + 1);
   }
   void full_node(int depth) {
     if (depth > kTreeDepth) bad(path, "the tree is deeper than " + std::to_string(kTreeDepth) + " levels");
@@ -103,16 +124,20 @@ struct Walker {
 // AbstractOcTree::read (.ot: createTree, readData) and readBinary (.bt: readBinaryData) do after
 // their header.
 template <typename Tree>
-Grid read_tree(const std::string& body, const Header& h, const std::string& path, const OctreeOptions& o) {
+Grid read_tree(std::string_view body, const Header& h, const std::string& path, const OctreeOptions& o) {
   Tree tree(h.res);
-  std::istringstream in(body);
+  BytesBuf buf(body);  // the checked bytes themselves, not a copy
+  std::istream in(&buf);
   if (h.size > 0) {
     if (h.binary) tree.readBinaryData(in);
     else tree.readData(in);
   }
   if (in.fail() || tree.size() != h.size)
     bad(path, "OctoMap read " + std::to_string(tree.size()) + " nodes of the " + std::to_string(h.size) + " checked");
-  return grid_from_octree(tree, o);
+  report_progress(o.progress, 0.3);
+  OctreeOptions rest = o;  // the conversion reports the rest of the bar
+  if (o.progress) rest.progress = [&o](double f) { return o.progress(0.3 + 0.7 * f); };
+  return grid_from_octree(tree, rest);
 }
 
 }  // namespace
@@ -120,14 +145,36 @@ Grid read_tree(const std::string& body, const Header& h, const std::string& path
 Grid read_octree_file(const std::string& path, const OctreeOptions& options) {
   options.validate();
   const std::string bytes = slurp(path);
+  report_progress(options.progress, 0.1);
   const Header h = parse_header(bytes, path);
   Walker w{bytes, path, h.data};
   if (h.binary) {
     if (h.id != "OcTree")
       throw Error(Status::unsupported, "'" + path + "': binary tree type '" + printable(h.id) + "' is not supported");
+    // The leaves come from the walk itself: the tree liboctomap would build from these bytes is
+    // never built (most of its reading time is allocating and freeing nodes).
+    const octomap::OcTree defaults(h.res);
+    w.free_l = defaults.getClampingThresMinLog();
+    w.occupied_l = defaults.getClampingThresMaxLog();
+    w.childless_l = octomap::OcTreeNode().getMaxChildLogOdds();
+    std::vector<octree_detail::Leaf> leaves;
+    leaves.reserve(std::min<std::size_t>(h.size, (bytes.size() - h.data) * 4 + 1));
+    w.leaves = &leaves;
     if (h.size > 0) {
       w.nodes = 1;
-      w.binary_node(0);
+      const std::uint16_t zero[3] = {0, 0, 0};
+      w.binary_node(0, zero);
+    }
+    if (w.nodes != h.size)
+      bad(path, "the header promises " + std::to_string(h.size) + " nodes, the data holds " + std::to_string(w.nodes));
+    report_progress(options.progress, 0.3);
+    OctreeOptions rest = options;
+    if (options.progress) rest.progress = [&options](double f) { return options.progress(0.3 + 0.7 * f); };
+    try {
+      return octree_detail::grid_from_leaves(leaves, h.res, kTreeDepth, rest);
+    } catch (const Error& e) {
+      if (e.status() == Status::format) throw;
+      throw Error(e.status(), "'" + path + "': " + e.what());
     }
   } else {
     // OcTreeNode::readData reads the float log-odds alone; ColorOcTreeNode adds r, g, b. An
@@ -140,7 +187,7 @@ Grid read_octree_file(const std::string& path, const OctreeOptions& options) {
   }
   if (w.nodes != h.size)
     bad(path, "the header promises " + std::to_string(h.size) + " nodes, the data holds " + std::to_string(w.nodes));
-  const std::string body = bytes.substr(h.data, w.pos - h.data);
+  const std::string_view body = std::string_view(bytes).substr(h.data, w.pos - h.data);
   try {
     if (h.binary || h.id == "OcTree") return read_tree<octomap::OcTree>(body, h, path, options);
     if (h.id == "ColorOcTree") return read_tree<octomap::ColorOcTree>(body, h, path, options);

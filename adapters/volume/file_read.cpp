@@ -51,6 +51,29 @@ struct Closer {
 
 }  // namespace
 
+InputFile::InputFile(const std::string& path) : path_(path) {
+  struct stat st {};
+  fd_ = open_file(path, st);
+  size_ = st.st_size > 0 ? static_cast<std::size_t>(st.st_size) : 0;
+}
+
+InputFile::~InputFile() { ::close(fd_); }
+
+std::size_t InputFile::read(void* buf, std::size_t n) {
+  auto* p = static_cast<char*>(buf);
+  std::size_t done = 0;
+  while (done < n) {
+    const ssize_t r = ::read(fd_, p + done, std::min<std::size_t>(n - done, std::size_t(1) << 30));
+    if (r == 0) break;
+    if (r < 0) {
+      if (errno == EINTR) continue;
+      throw Error(Status::io, "cannot read '" + path_ + "': " + std::strerror(errno));
+    }
+    done += static_cast<std::size_t>(r);
+  }
+  return done;
+}
+
 void check_readable(const std::string& path) {
   struct stat st {};
   Closer closer{open_file(path, st)};

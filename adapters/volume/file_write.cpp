@@ -164,6 +164,7 @@ void StagedFiles::discard() noexcept {
   if (committed_) return;
   for (const File& f : files_) ::unlink(f.tmp.c_str());
   files_.clear();
+  removals_.clear();
 }
 
 std::vector<std::string> StagedFiles::paths() const {
@@ -206,6 +207,11 @@ void StagedFiles::stage(const std::string& path, const std::function<void(std::o
   files_.push_back(std::move(f));
 }
 
+void StagedFiles::remove_on_commit(const std::string& path) {
+  if (committed_) throw Error(Status::internal, "cannot remove '" + path + "': the set was committed already");
+  removals_.push_back(path);
+}
+
 void StagedFiles::commit() {
   if (committed_) return;
   // Checked again after each swap; checked here so that the common case fails before any rename.
@@ -220,6 +226,11 @@ void StagedFiles::commit() {
   done.reserve(files_.size());
   std::vector<std::string> dirs;
   for (const File& f : files_) dirs.push_back(dir_of(f.path));
+  for (const std::string& r : removals_) dirs.push_back(dir_of(r));
+  // Where each removed file waits until the step has succeeded ("" when it was gone already).
+  std::vector<std::string> aside;
+  aside.reserve(removals_.size());
+  for (const std::string& r : removals_) aside.push_back(temp_name(r));
   int err = 0;
   const char* failed = nullptr;
   bool is_dir = false;
@@ -253,7 +264,30 @@ void StagedFiles::commit() {
       failed = path;
       break;
     }
+    std::size_t moved = 0;  // removals done (moved aside), in order
+    for (; !failed && moved < removals_.size(); ++moved) {
+      struct stat st {};
+      if (::lstat(removals_[moved].c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {  // only regular files go
+        aside[moved].clear();
+        continue;
+      }
+      // RENAME_NOREPLACE: the aside name is never a file that appeared there meanwhile.
+      if (::renameat2(AT_FDCWD, removals_[moved].c_str(), AT_FDCWD, aside[moved].c_str(), RENAME_NOREPLACE) == 0)
+        continue;
+      if (errno == ENOENT) {  // gone already: nothing to remove or to put back
+        aside[moved].clear();
+        continue;
+      }
+      if ((errno == EINVAL || errno == ENOSYS) && ::access(aside[moved].c_str(), F_OK) != 0 &&
+          ::rename(removals_[moved].c_str(), aside[moved].c_str()) == 0)
+        continue;
+      err = errno;
+      failed = removals_[moved].c_str();
+      break;
+    }
     if (failed) {
+      for (std::size_t i = moved; i-- > 0;)  // the removals before the failed one, put back
+        if (!aside[i].empty()) ::rename(aside[i].c_str(), removals_[i].c_str());
       // Undo in reverse order: old files back to their names, new names removed.
       for (std::size_t i = done.size(); i-- > 0;) {
         const File& f = files_[i];
@@ -263,6 +297,8 @@ void StagedFiles::commit() {
     } else {
       for (std::size_t i = 0; i < files_.size(); ++i)
         if (done[i] == swapped) ::unlink(files_[i].tmp.c_str());  // the old version
+      for (const std::string& a : aside)
+        if (!a.empty()) ::unlink(a.c_str());
     }
   }
   if (failed) {

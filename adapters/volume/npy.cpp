@@ -192,7 +192,7 @@ std::size_t NpyArray::element_count() const {
   return n;
 }
 
-NpyArray parse_npy(const unsigned char* b, std::size_t size, const std::string& name) {
+NpyArray parse_npy_header(const unsigned char* b, std::size_t size, const std::string& name, std::size_t& data_offset) {
   static const unsigned char magic[6] = {0x93, 'N', 'U', 'M', 'P', 'Y'};
   if (size < 10 || std::memcmp(b, magic, 6) != 0) fail(name, "wrong magic (not \\x93NUMPY)");
   const int major = b[6];
@@ -212,7 +212,8 @@ NpyArray parse_npy(const unsigned char* b, std::size_t size, const std::string& 
   NpyArray a;
   HeaderParser(h, name, major <= 2).parse(a);
   // Big-endian data ('>f4', '>f8', '>u2', ..., as NumPy writes arrays of that byte order, and
-  // NumPy's np.load reads back) is swapped to little-endian below; '>u1' holds single bytes.
+  // NumPy's np.load reads back) is swapped to little-endian as it is read (swap_to_little_endian);
+  // '>u1' holds single bytes.
   if (a.descr.size() > 1 && a.descr[0] == '>' && item_size("<" + a.descr.substr(1))) {
     a.descr[0] = '<';
     a.big_endian = true;
@@ -226,13 +227,133 @@ NpyArray parse_npy(const unsigned char* b, std::size_t size, const std::string& 
     count *= v;
   }
   if (count > kMaxVoxels) fail(name, "shape claims more than 2^40 elements");
-  const std::size_t need = count * isz, body = size - off - hlen;
+  data_offset = off + hlen;
+  return a;
+}
+
+namespace {
+
+void check_body(const NpyArray& a, std::size_t body, const std::string& name) {
+  const std::size_t need = a.element_count() * item_size(a.descr);
   if (body < need)
     fail(name, "truncated data: header promises " + std::to_string(need) + " bytes, file has " + std::to_string(body));
-  a.data.assign(b + off + hlen, b + off + hlen + need);
-  if (a.big_endian && isz > 1)
-    for (std::size_t i = 0; i < need; i += isz) std::reverse(a.data.begin() + i, a.data.begin() + i + isz);
+}
+
+// The grid of an array, checked (dims, dtype, geometry) but without its samples.
+Grid npy_grid_frame(const NpyArray& a, double voxel_size, const std::string& name) {
+  if (a.shape.size() != 3 && a.shape.size() != 2)
+    throw Error(Status::bad_dims, "'" + name + "' has " + std::to_string(a.shape.size()) +
+                                      " dimensions; a map is [z, y, x] (or [y, x] for 2D)");
+  Dims d;
+  d.nx = a.shape.back();
+  d.ny = a.shape[a.shape.size() - 2];
+  d.nz = a.shape.size() == 3 ? a.shape[0] : 1;
+  check_dims(d);
+  if (a.descr == "<u4" || a.descr == "<i4")
+    throw Error(Status::format, "'" + name + "' holds " + a.descr + " integers, not probabilities (use float32, float64, uint8 or uint16)");
+  Grid g;
+  g.dims = d;
+  g.voxel_size = voxel_size;
+  try {
+    check_geometry(g);
+  } catch (const Error& e) {
+    throw Error(e.status(), "'" + name + "': " + e.what());
+  }
+  return g;
+}
+
+void checked_probabilities(const Grid& g, const std::string& name) {
+  try {
+    check_probabilities(g);
+  } catch (const Error& e) {
+    throw Error(e.status(), "'" + name + "': " + e.what());
+  }
+}
+
+// Reads `n` bytes of the file into `to` in pieces, reporting progress; a file that ends early
+// (it shrank since it was opened) is the truncation it is.
+// `piece_ok` (if given) checks each piece as soon as it is read, while it is in the cache; returns
+// false when some piece failed it.
+bool read_body(InputFile& f, unsigned char* to, std::size_t n, const std::string& name, const IoProgress& progress,
+               bool (*piece_ok)(const unsigned char*, std::size_t) = nullptr) {
+  constexpr std::size_t kPiece = std::size_t(1) << 20, kReport = std::size_t(1) << 24;
+  bool ok = true;
+  for (std::size_t at = 0, reported = 0; at < n;) {
+    const std::size_t want = std::min(kPiece, n - at), got = f.read(to + at, want);
+    if (piece_ok && ok) ok = piece_ok(to + at, got);
+    at += got;
+    if (got < want)
+      fail(name, "truncated data: header promises " + std::to_string(n) + " bytes, file has " + std::to_string(at));
+    if (at - reported >= kReport || at == n) {
+      report_progress(progress, double(at) / double(n));
+      reported = at;
+    }
+  }
+  return ok;
+}
+
+// The elements of a big-endian array in the machine's (little-endian) order.
+void swap_to_little_endian(const NpyArray& a, unsigned char* bytes, std::size_t n) {
+  const std::size_t isz = item_size(a.descr);
+  if (!a.big_endian || isz < 2) return;
+  for (std::size_t i = 0; i + isz <= n; i += isz) std::reverse(bytes + i, bytes + i + isz);
+}
+
+bool floats_in_range(const unsigned char* bytes, std::size_t n) {
+  return probabilities_in_range(reinterpret_cast<const float*>(bytes), n / sizeof(float));
+}
+
+}  // namespace
+
+NpyArray parse_npy(const unsigned char* b, std::size_t size, const std::string& name) {
+  std::size_t off = 0;
+  NpyArray a = parse_npy_header(b, size, name, off);
+  check_body(a, size - off, name);
+  a.data.assign(b + off, b + off + a.element_count() * item_size(a.descr));
+  swap_to_little_endian(a, a.data.data(), a.data.size());
   return a;
+}
+
+Grid read_npy_grid(const std::string& path, double voxel_size, NpyArray* header, const IoProgress& progress) {
+  InputFile f(path);
+  // The fixed prefix (magic, version, header length), then the header it announces.
+  std::vector<unsigned char> head(12);
+  head.resize(f.read(head.data(), std::min<std::size_t>(12, f.size())));
+  std::size_t hlen = 0, off = 10;
+  if (head.size() >= 10 && head[6] == 1) hlen = head[8] | (std::size_t(head[9]) << 8);
+  else if (head.size() >= 12 && (head[6] == 2 || head[6] == 3))
+    hlen = head[8] | (std::size_t(head[9]) << 8) | (std::size_t(head[10]) << 16) | (std::size_t(head[11]) << 24), off = 12;
+  const std::size_t want = std::min(f.size(), off + hlen);  // a header beyond the file: parse says truncated
+  if (want > head.size()) {
+    const std::size_t had = head.size();
+    head.resize(want);
+    head.resize(had + f.read(head.data() + had, want - had));
+  }
+  std::size_t data_at = 0;
+  NpyArray a = parse_npy_header(head.data(), head.size(), path, data_at);
+  // A header that parses is a dict of at least two bytes, so the 12 bytes read first never reach
+  // into the data: the file is positioned at data_at.
+  check_body(a, f.size() - data_at, path);
+  Grid g = npy_grid_frame(a, voxel_size, path);
+  const std::size_t n = g.dims.count(), bytes = n * item_size(a.descr);
+  bool values_ok = false;
+  if (a.descr == "<f4" && !a.fortran_order && !a.big_endian) {
+    g.p.resize(n);
+    values_ok = read_body(f, reinterpret_cast<unsigned char*>(g.p.data()), bytes, path, progress, floats_in_range);
+  } else {
+    a.data.resize(bytes);
+    read_body(f, a.data.data(), bytes, path, progress);
+    swap_to_little_endian(a, a.data.data(), bytes);
+    g = grid_from_npy(a, voxel_size, path);  // checks the values it converts
+    values_ok = true;
+  }
+  if (!values_ok) checked_probabilities(g, path);  // names the first bad voxel
+  if (header) {
+    a.data.clear();
+    a.data.shrink_to_fit();
+    *header = std::move(a);
+  }
+  return g;
 }
 
 NpyArray read_npy(const std::string& path) {

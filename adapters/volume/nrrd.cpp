@@ -16,6 +16,7 @@
 #include "occseg/geometry.hpp"
 #include "occseg/file_read.hpp"
 #include "occseg/file_write.hpp"
+#include "occseg/gzip.hpp"
 
 namespace occseg {
 
@@ -197,11 +198,11 @@ const char* nrrd_type_name(NrrdType t) {
   return "?";
 }
 
-NrrdVolume read_nrrd(const std::string& path) {
+NrrdVolume read_nrrd(const std::string& path, const IoProgress& progress) {
   const std::string b = read_file(path);
   if (b.compare(0, 4, "NRRD") != 0) bad(path, "it does not start with NRRD");
   NrrdVolume v;
-  bool have_type = false, have_sizes = false, big = false, ascii = false, have_endian = false;
+  bool have_type = false, have_sizes = false, big = false, ascii = false, gzip = false, have_endian = false;
   int dimension = 0, space_dim = 0;
   std::vector<std::size_t> sizes;
   std::vector<std::string> seen;  // canonical names of the fields read so far
@@ -278,8 +279,9 @@ NrrdVolume read_nrrd(const std::string& path) {
     } else if (field == "encoding") {
       const std::string enc = lower(value);
       if (enc == "ascii" || enc == "text" || enc == "txt") ascii = true;
+      else if (enc == "gzip" || enc == "gz") gzip = true;  // teem's spellings of gzip
       else if (enc != "raw")
-        unsupported(path, "encoding '" + shown + "' is not supported (raw, ascii); re-save with `unu save -e raw`");
+        unsupported(path, "encoding '" + shown + "' is not supported (raw, gzip, ascii); re-save with `unu save -e gzip`");
     } else if (field == "endian") {
       have_endian = true;
       const std::string en = lower(value);
@@ -332,6 +334,18 @@ NrrdVolume read_nrrd(const std::string& path) {
   if (!dimension || !have_sizes || sizes.size() != std::size_t(dimension))
     bad(path, "dimension and sizes are missing or disagree");
   v.dims = Dims{sizes[0], sizes[1], dimension == 3 ? sizes[2] : 1};
+  {
+    // Data the file cannot hold is a format error before any size check (which may refuse a map
+    // too large for the memory): raw bytes missing, or more than deflate's 1032:1 could give.
+    const double promised = double(v.dims.nx) * double(v.dims.ny) * double(v.dims.nz) * double(type_size(v.type));
+    const double have = double(b.size() - pos);
+    if (gzip && promised / 1032 > have + 64)
+      bad(path, "the " + std::to_string(b.size() - pos) + " bytes of gzip data cannot hold the " +
+                    std::to_string(static_cast<unsigned long long>(promised)) + " bytes the header promises");
+    if (!gzip && !ascii && promised > have && v.dims.count() > 0 && promised < 1e18)
+      bad(path, "truncated data: the header promises " + std::to_string(static_cast<unsigned long long>(promised)) +
+                    " bytes, the file has " + std::to_string(b.size() - pos));
+  }
   try {
     check_dims(v.dims);
   } catch (const Error& e) {
@@ -371,6 +385,19 @@ NrrdVolume read_nrrd(const std::string& path) {
     return v;
   }
   if (isz > 1 && !have_endian) bad(path, "multi-byte raw data needs an endian field");
+  if (gzip) {
+    // Deflate shrinks data at most 1032:1, so a header promising more than that of the bytes
+    // present cannot be honoured: refused before anything is allocated for it.
+    const std::size_t have = b.size() - pos;
+    if (n * isz / 1032 > have + 64)
+      bad(path, "the " + std::to_string(have) + " bytes of gzip data cannot hold the " + std::to_string(n * isz) +
+                    " bytes the header promises");
+    v.data.resize(n * isz);
+    const std::string why = gunzip_exact(b.data() + pos, have, v.data.data(), v.data.size(), progress);
+    if (!why.empty()) bad(path, why);
+    if (isz > 1 && big == host_little_endian()) swap_bytes(v.data, isz);
+    return v;
+  }
   if (b.size() - pos < n * isz)
     bad(path, "truncated data: the header promises " + std::to_string(n * isz) + " bytes, the file has " +
                   std::to_string(b.size() - pos));
@@ -418,7 +445,7 @@ Grid grid_from_nrrd(const NrrdVolume& v, const std::string& name) {
 
 void write_nrrd(const std::string& path, NrrdType type, const Dims& dims, double voxel_size,
                 const std::array<double, 3>& corner, const void* data, std::size_t bytes, const std::string& content,
-                const std::string& space, StagedFiles* into) {
+                const std::string& space, StagedFiles* into, const NrrdWriteOptions& options) {
   check_dims(dims);
   if (bytes != dims.count() * type_size(type))
     throw Error(Status::invalid_argument, "write_nrrd: " + std::to_string(bytes) + " bytes do not match the dims");
@@ -446,27 +473,39 @@ void write_nrrd(const std::string& path, NrrdType type, const Dims& dims, double
   h << "type: " << nrrd_type_name(type) << "\ndimension: 3\nspace: " << space_name << "\n"
     << "sizes: " << dims.nx << " " << dims.ny << " " << dims.nz << "\n"
     << "space directions: (" << num(voxel_size) << ",0,0) (0," << num(voxel_size) << ",0) (0,0," << num(voxel_size)
-    << ")\nkinds: domain domain domain\nendian: little\nencoding: raw\n"
+    << ")\nkinds: domain domain domain\nendian: little\nencoding: " << (options.gzip ? "gzip" : "raw") << "\n"
     << "space origin: (" << num(centre[0]) << "," << num(centre[1]) << "," << num(centre[2]) << ")\n\n";
   const std::string header = h.str();
   write_file_atomically(path, [&](std::ostream& out) {
     out.write(header.data(), static_cast<std::streamsize>(header.size()));
-    out.write(static_cast<const char*>(data), static_cast<std::streamsize>(bytes));
+    if (options.gzip) {
+      write_gzip(out, data, bytes, options.level, options.threads, options.progress);
+      return;
+    }
+    // Raw: written in pieces straight from the caller's array, reporting progress between them.
+    const char* d = static_cast<const char*>(data);
+    for (std::size_t at = 0; at < bytes && out;) {
+      const std::size_t k = std::min(bytes - at, kGzipPiece * 4);
+      out.write(d + at, static_cast<std::streamsize>(k));
+      at += k;
+      report_progress(options.progress, double(at) / double(bytes));
+    }
   }, into);
 }
 
-void write_grid_nrrd(const std::string& path, const Grid& g, const std::string& space, StagedFiles* into) {
+void write_grid_nrrd(const std::string& path, const Grid& g, const std::string& space, StagedFiles* into,
+                     const NrrdWriteOptions& options) {
   write_nrrd(path, NrrdType::f32, g.dims, g.voxel_size, g.origin, g.p.data(), g.p.size() * sizeof(float),
-             "occupancy probability", space, into);
+             "occupancy probability", space, into, options);
 }
 
 void write_labels_nrrd(const std::string& path, const Grid& g, const LabelArray& labels, const std::string& space,
-                       StagedFiles* into) {
+                       StagedFiles* into, const NrrdWriteOptions& options) {
   if (labels.size() != g.dims.count())
     throw Error(Status::invalid_argument, "write_labels_nrrd: " + std::to_string(labels.size()) +
                                               " labels for " + std::to_string(g.dims.count()) + " voxels");
   write_nrrd(path, NrrdType::u32, g.dims, g.voxel_size, g.origin, labels.data(), labels.size() * 4, "segment labels",
-             space, into);
+             space, into, options);
 }
 
 }  // namespace occseg

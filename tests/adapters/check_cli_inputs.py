@@ -1,6 +1,7 @@
 """Runs `occseg segment` on every input kind (.npy .nrrd .pcd .graph .bt .ot) as a user would and
 checks the outputs: labels.npy, labels.nrrd (same labels, grid geometry), segments.json,
 map.nrrd for non-grid inputs and segments.pcd (occupied voxels, label = segment id) for clouds."""
+import gzip
 import json
 import os
 import re
@@ -27,7 +28,8 @@ def read_nrrd(path):
     nx, ny, nz = map(int, fields["sizes"].split())
     vs = float(re.match(r"\(([^,]+),", fields["space directions"]).group(1))
     origin = [float(v) for v in fields["space origin"].strip("()").split(",")]
-    return np.frombuffer(b[i + 2:], dtype=dt).reshape(nz, ny, nx), vs, origin
+    data = gzip.decompress(b[i + 2:]) if fields["encoding"] == "gzip" else b[i + 2:]
+    return np.frombuffer(data, dtype=dt).reshape(nz, ny, nx), vs, origin
 
 
 def read_pcd_xyzl(path):
@@ -43,7 +45,7 @@ def read_pcd_xyzl(path):
 
 def check(name, args, cloud=False, grid=False, octomap=False):
     out = os.path.join(work, name)
-    r = run("segment", *args, "--out", out)
+    r = run("segment", *args, "--out", out, "--outputs", "all")
     assert r.returncode == 0, (name, r.stderr)
     files = sorted(os.listdir(out))
     want = ["labels.npy", "labels.nrrd", "scene.png", "segmentation.png", "segments.json"] + ([] if grid else ["map.nrrd"]) + (

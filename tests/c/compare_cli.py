@@ -24,7 +24,7 @@ np.save(os.path.join(work, "map.npy"), m.astype(np.float32))
 np.asfortranarray(m.astype(np.float32).astype(np.float64)).ravel(order="K").tofile(os.path.join(work, "map.f64"))
 
 cpp_out, c_npy, c_raw = (os.path.join(work, d) for d in ("cpp", "c_npy", "c_raw"))
-subprocess.run([cli, "segment", os.path.join(work, "map.npy"), "--out", cpp_out], check=True)
+subprocess.run([cli, "segment", os.path.join(work, "map.npy"), "--out", cpp_out, "--outputs", "all"], check=True)
 subprocess.run([tool, os.path.join(work, "map.npy"), c_npy, os.path.join(work, "map.f64"),
                 str(nx), str(ny), str(nz), c_raw], check=True)
 

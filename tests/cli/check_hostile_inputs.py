@@ -2,6 +2,7 @@
 the reference library reads (liboctomap, NumPy, teem) or refuses with exit code 2 and a message,
 never crashes, never writes outputs for a refused input, keeps an NRRD input's space, and never
 prints a file's raw control bytes."""
+import gzip
 import json
 import os
 import struct
@@ -62,13 +63,14 @@ for space, written in (("left-posterior-superior", "left-posterior-superior"), (
            "kinds: domain domain domain\nendian: little\nencoding: raw\nspace origin: (10.25,-20.5,3)\n\n")
     f = put("vol.nrrd", hdr.encode() + m.tobytes())
     out = os.path.join(work, "out_" + space)
-    r = run("segment", f, "--out", out)
+    r = run("segment", f, "--out", out, "--outputs", "all")
     assert r.returncode == 0, r.stderr
     b = open(os.path.join(out, "labels.nrrd"), "rb").read()
     head = b[:b.index(b"\n\n") + 1].decode()
     assert ("\nspace: %s\n" % written) in head, head
     assert "\n" + geometry.split("\n")[1] + "\n" in head and "\nspace origin: (10.25,-20.5,3)\n" in head, head
-    labels = np.frombuffer(b[b.index(b"\n\n") + 2:], dtype="<u4").reshape(6, 7, 8)
+    assert "\nencoding: gzip\n" in head, head
+    labels = np.frombuffer(gzip.decompress(b[b.index(b"\n\n") + 2:]), dtype="<u4").reshape(6, 7, 8)
     assert np.array_equal(labels, np.load(os.path.join(out, "labels.npy"))), space
 
 # 4. .npy headers: whatever occseg reads, NumPy reads with the same shape; the rest is refused.

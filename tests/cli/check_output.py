@@ -70,8 +70,7 @@ with open("/dev/full", "w") as full:
         assert r.stderr == "occseg: error: cannot write to standard output: No space left on device\n", (args, r.stderr)
         assert run(args).returncode == 0, args  # and the same to a pipe works
 # The files were complete before the summary was printed; they stay.
-assert sorted(os.listdir(os.path.join(work, "full_json"))) == ["labels.npy", "labels.nrrd", "scene.png", "segmentation.png",
-                                                                "segments.json"]
+assert sorted(os.listdir(os.path.join(work, "full_json"))) == ["labels.nrrd", "scene.png", "segmentation.png", "segments.json"]
 no_temporaries()
 
 # --- out of memory anywhere in `occseg segment`: exit 3, "out of memory while ...", old set kept ---

@@ -21,7 +21,7 @@ np.save(os.path.join(work, "map.npy"), m)
 np.save(os.path.join(work, "map_f.npy"), np.asfortranarray(m.astype(np.float64)))
 
 out = os.path.join(work, "out")
-r = run("segment", os.path.join(work, "map.npy"), "--out", out)
+r = run("segment", os.path.join(work, "map.npy"), "--out", out, "--outputs", "all")
 assert r.returncode == 0, r.stderr
 labels = np.load(os.path.join(out, "labels.npy"))
 assert labels.dtype == np.uint32 and labels.shape == m.shape, (labels.dtype, labels.shape)
@@ -34,7 +34,7 @@ assert occ[1]["voxels"] == 15 * 15 * 20
 assert all(s["id"] == i for i, s in enumerate(doc["segments"]))
 assert (labels == labels[7, 7, 7]).sum() == 1000
 
-r = run("segment", os.path.join(work, "map_f.npy"), "--out", out + "_f", "--threads", "1")
+r = run("segment", os.path.join(work, "map_f.npy"), "--out", out + "_f", "--threads", "1", "--outputs", "all")
 assert r.returncode == 0, r.stderr
 assert (np.load(os.path.join(out + "_f", "labels.npy")) == labels).all()
 
@@ -55,6 +55,6 @@ r = run("segment", os.path.join(work, "missing.npy"), "--out", os.path.join(work
 assert r.returncode == 2 and "missing.npy" in r.stderr, r.stderr
 r = run("segment", os.path.join(work, "map.npy"))
 assert r.returncode == 1, r.returncode  # usage: --out missing
-r = run("segment", os.path.join(work, "map.npy"), "--out", out, "--param", "smax=48")
+r = run("segment", os.path.join(work, "map.npy"), "--out", out, "--param", "smax=48", "--outputs", "all")
 assert r.returncode == 1 and "smax" in r.stderr, r.stderr
 print("cli segment: all checks passed")

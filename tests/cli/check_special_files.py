@@ -49,7 +49,7 @@ for ext in ("npy", "nrrd", "pcd", "graph", "bt", "ot"):
 # evaluate's inputs (segments.json, a simulated scene's scene.json) likewise.
 r = run("simulate", "--scene", "cube", "--dims", "32", "32", "16", "--out", "truth")
 assert r.returncode == 0, r.stderr
-r = run("segment", "truth/map.npy", "--out", "seg", "--quiet")
+r = run("segment", "truth/map.npy", "--out", "seg", "--quiet", "--outputs", "all")
 assert r.returncode == 0, r.stderr
 os.mkfifo(os.path.join(work, "fifo.json"))
 one_line_error(run("evaluate", "--truth", "truth", "--labels", "seg/labels.npy", "--segments", "fifo.json"), 2,
@@ -69,6 +69,6 @@ assert r.returncode == 0 and r.stdout.startswith("occseg "), (r.returncode, r.st
 assert "warning" in r.stderr and "stuck.so" in r.stderr and "FIFO" in r.stderr, r.stderr
 np.save(os.path.join(work, "m.npy"), np.full((8, 8, 8), 0.2, np.float32))
 r = run("segment", "m.npy", "--out", "o", "--quiet", env=env)
-assert r.returncode == 0 and os.path.exists(os.path.join(work, "o", "labels.npy")), (r.returncode, r.stderr)
+assert r.returncode == 0 and os.path.exists(os.path.join(work, "o", "labels.nrrd")), (r.returncode, r.stderr)
 one_line_error(run("plugins", "--load", os.path.join(plugins, "stuck.so")), 2, "stuck.so", "FIFO")
 print("cli special files: all checks passed")

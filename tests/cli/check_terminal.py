@@ -62,8 +62,18 @@ code, text = in_terminal(job + ["--out", "seg"])
 assert code == 0, (code, text)
 bars = BAR.findall(text)
 assert bars and any("segmenting: " in b or "writing " in b for b in bars), text
-assert "\r" in text and "written: seg/labels.npy" in text, text
-assert sorted(os.listdir(os.path.join(work, "seg"))) == ["labels.npy", "labels.nrrd", "scene.png", "segmentation.png", "segments.json"]
+assert "\r" in text and "written: seg/labels.nrrd" in text, text
+assert sorted(os.listdir(os.path.join(work, "seg"))) == ["labels.nrrd", "scene.png", "segmentation.png", "segments.json"]
+# Reading and writing report their progress too (issue 27: the bar stayed at 0 % through both):
+# each phase redraws at every whole percent, so the bar shows how far each got before the next
+# (the bar from the start, OCCSEG_PROGRESS_DELAY=0, so that the reading shows at all).
+code, text = in_terminal(job + ["--out", "seg_progress"], env={"OCCSEG_PROGRESS_DELAY": "0"})
+assert code == 0, (code, text)
+def percents(label):
+    return [int(m) for m in re.findall(re.escape("occseg: " + label) + r" \[[#.]+\] +(\d+)%", text)]
+assert percents("reading map.npy") and max(percents("reading map.npy")) == 100, text
+# labels.nrrd is the first of three files: the bar goes from 0 to a third while it is written.
+assert percents("writing labels.nrrd") and max(percents("writing labels.nrrd")) >= 30, text
 
 # No terminal (pipes), or --quiet: no bar, nothing on stderr.
 r = subprocess.run([occseg, *job, "--out", "seg_pipe"], cwd=work, capture_output=True, text=True)

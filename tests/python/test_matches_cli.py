@@ -10,7 +10,7 @@ from conftest import noisy_scene
 
 def cli_segment(cli, tmp_path, array, *args):
     np.save(tmp_path / "map.npy", array)
-    cli("segment", tmp_path / "map.npy", "--out", tmp_path / "cli", *args)
+    cli("segment", tmp_path / "map.npy", "--out", tmp_path / "cli", "--outputs", "all", *args)
     labels = np.load(tmp_path / "cli" / "labels.npy")
     doc = json.loads((tmp_path / "cli" / "segments.json").read_text())
     return labels, doc

@@ -135,7 +135,7 @@ def test_example_plugin_segments_like_the_tool(example, cli, tmp_path):
     env = dict(os.environ, OCCSEG_PLUGIN_PATH=os.path.dirname(example))
     args = [a for k, v in params.items() for a in ("--param", f"{k}={v}")]
     out = subprocess.run([os.environ["OCCSEG_CLI"], "segment", str(tmp_path / "cube.occtxt"), "--out",
-                          str(tmp_path / "cli"), *args], env=env, capture_output=True, text=True)
+                          str(tmp_path / "cli"), "--outputs", "all", *args], env=env, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert np.array_equal(np.load(tmp_path / "cli" / "labels.npy"), r.labels)
     r.write(tmp_path / "py")

@@ -3,6 +3,7 @@ turned into a grid by `occseg segment` (which writes it as map.nrrd next to its 
 bindings, fed that grid straight from the file's bytes, must reproduce the tool's segmentation.
 Needs a build with OctoMap (and, for the .bt read by occseg.read_map, its reader plugin);
 skipped with the reason otherwise."""
+import gzip
 import json
 import os
 import re
@@ -18,18 +19,21 @@ DATA = os.environ.get("OCCSEG_SHARED_DATA", os.path.join(os.path.dirname(__file_
 
 
 def read_nrrd(path):
-    """(float32 [z, y, x] array viewing the file's bytes in place, voxel size, origin corner) of
-    the raw, little-endian, axis-aligned NRRD the tool writes."""
+    """(float32 [z, y, x] array, voxel size, origin corner) of the little-endian, axis-aligned NRRD
+    the tool writes (gzip-encoded; raw ones are read too)."""
     raw = open(path, "rb").read()
     head, _, _ = raw.partition(b"\n\n")
     fields = dict(line.split(": ", 1) for line in head.decode().splitlines()[1:] if ": " in line)
-    assert fields["type"] == "float" and fields["encoding"] == "raw" and fields["endian"] == "little"
+    assert fields["type"] == "float" and fields["encoding"] in ("raw", "gzip") and fields["endian"] == "little"
     nx, ny, nz = map(int, fields["sizes"].split())
     steps = [float(v) for v in re.findall(r"[-0-9.e]+", fields["space directions"])]
     assert steps[0] == steps[4] == steps[8]
     # NRRD's space origin is the centre of the first voxel; occseg's origin is its outer corner
     origin = tuple(float(v) - steps[0] / 2 for v in re.findall(r"[-0-9.e]+", fields["space origin"]))
-    data = np.frombuffer(raw, dtype="<f4", offset=len(head) + 2, count=nx * ny * nz).reshape(nz, ny, nx)
+    body = raw[len(head) + 2:]
+    if fields["encoding"] == "gzip":  # map.nrrd is gzip-encoded since issue 27
+        body = gzip.decompress(body)
+    data = np.frombuffer(body, dtype="<f4", count=nx * ny * nz).reshape(nz, ny, nx)
     return data, steps[0], origin
 
 
@@ -39,7 +43,7 @@ def corridor(tmp_path_factory):
     if not os.path.exists(bt):
         pytest.fail(f"{bt} is missing (see ../shared/data/README.md)")
     out = tmp_path_factory.mktemp("geb079") / "out"
-    r = subprocess.run([os.environ["OCCSEG_CLI"], "segment", bt, "--out", str(out)], capture_output=True, text=True)
+    r = subprocess.run([os.environ["OCCSEG_CLI"], "segment", bt, "--out", str(out), "--outputs", "all"], capture_output=True, text=True)
     if r.returncode != 0 and "needs OctoMap" in r.stderr:
         pytest.skip(r.stderr.strip())
     assert r.returncode == 0, r.stderr

@@ -138,7 +138,8 @@ TEST(Output, TheCommandLeavesNothingWhenTheDiskFillsOrTheDirectoryIsUnwritable) 
       const int null = ::open("/dev/null", O_WRONLY);
       ::dup2(null, 1);
       ::dup2(null, 2);
-      ::execl(OCCSEG_CLI, OCCSEG_CLI, "segment", in.c_str(), "--out", out.c_str(), static_cast<char*>(nullptr));
+      ::execl(OCCSEG_CLI, OCCSEG_CLI, "segment", in.c_str(), "--out", out.c_str(), "--outputs", "all",
+              static_cast<char*>(nullptr));
       return 97;
     });
   };
@@ -147,7 +148,8 @@ TEST(Output, TheCommandLeavesNothingWhenTheDiskFillsOrTheDirectoryIsUnwritable) 
   ASSERT_GE(written.size(), 3u);
   EXPECT_EQ(written.front(), "labels.npy");
   EXPECT_EQ(written.back(), "segments.json");
-  // labels.npy and labels.nrrd take 55 kB each: fail at the first, the second, a later file.
+  // (--outputs all: labels.nrrd (gzip), segments.json, segmentation.png, labels.npy of 55 kB.)
+  // Fail at an early, a middle and a late file.
   for (rlim_t limit : {rlim_t(1000), rlim_t(60000), rlim_t(120000)}) {
     const std::string out = dir + "/full" + std::to_string(limit);
     EXPECT_EQ(run_cli(out, limit, false), 2) << limit;
@@ -199,7 +201,8 @@ int run_cli_sigxfsz_default(const std::string& in, const std::string& out, rlim_
     const int e = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     ::dup2(null, 1);
     ::dup2(e, 2);
-    ::execl(OCCSEG_CLI, OCCSEG_CLI, "segment", in.c_str(), "--out", out.c_str(), static_cast<char*>(nullptr));
+    ::execl(OCCSEG_CLI, OCCSEG_CLI, "segment", in.c_str(), "--out", out.c_str(), "--outputs", "all",
+              static_cast<char*>(nullptr));
     return 97;
   });
 }
@@ -301,11 +304,10 @@ TEST(Output, TheCommandReportsAFileSizeLimitAndKeepsTheEarlierRun) {
   ASSERT_EQ(run_cli_sigxfsz_default(in_a, out, RLIM_INFINITY, err), 0) << slurp(err);
   const auto old = contents(out);
   ASSERT_GE(old.size(), 4u);
-  // Fail at the first file (labels.npy), the second (labels.nrrd: the same data after a longer
-  // header), a later one (segments.json).
-  const std::size_t npy = 128 + 4 * 26 * 26 * 26, nrrd = old.at("labels.nrrd").size() - 4 * 24 * 24 * 24 + 4 * 26 * 26 * 26;
-  ASSERT_GT(nrrd, npy + 2);
-  for (rlim_t limit : {rlim_t(1000), rlim_t((npy + nrrd) / 2), rlim_t(nrrd + 1000)}) {
+  // Fail at an early file, a middle and a late one (--outputs all: labels.nrrd gzip-encoded, then
+  // segments.json of over 300 kB, segmentation.png, labels.npy of 70 kB).
+  const std::size_t npy = 128 + 4 * 26 * 26 * 26;
+  for (rlim_t limit : {rlim_t(1000), rlim_t(npy / 2), rlim_t(npy + 1000)}) {
     EXPECT_EQ(run_cli_sigxfsz_default(in_b, out, limit, err), 2) << limit;
     const std::string message = slurp(err);
     EXPECT_NE(message.find("occseg: error: cannot write '" + out + "/"), std::string::npos) << message;

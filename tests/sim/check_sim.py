@@ -60,7 +60,7 @@ for x in res["results"]:
 
 # evaluate an existing segmentation: the same numbers as --method default.
 seg = os.path.join(work, "seg")
-r = run("segment", os.path.join(a, "map.npy"), "--out", seg)
+r = run("segment", os.path.join(a, "map.npy"), "--out", seg, "--outputs", "all")
 assert r.returncode == 0, r.stderr
 r = run("evaluate", "--truth", a, "--labels", os.path.join(seg, "labels.npy"), "--segments",
         os.path.join(seg, "segments.json"), "--json")

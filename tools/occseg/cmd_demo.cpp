@@ -132,7 +132,9 @@ int run(const DemoArgs& o) {
                          &staged);
        }},
       {"labels.npy", [&](const std::string& f, StagedFiles& s) { write_labels_npy(f, r.dims, r.labels, &s); }},
-      {"labels.nrrd", [&](const std::string& f, StagedFiles& s) { write_labels_nrrd(f, map, r.labels, "", &s); }},
+      {"labels.nrrd", [&](const std::string& f, StagedFiles& s) { NrrdWriteOptions gz;
+         gz.gzip = true;
+         write_labels_nrrd(f, map, r.labels, "", &s, gz); }},
       {"segments.json",
        [&](const std::string& f, StagedFiles& s) {
          const std::vector<OrientedBox> boxes = oriented_boxes(r, map.voxel_size, map.origin);

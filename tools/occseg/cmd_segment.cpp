@@ -1,14 +1,21 @@
 // `occseg segment IN --out DIR`: segment a map (.npy .nrrd .pcd .graph .bt .ot, see map_input)
-// and write labels.npy, labels.nrrd, segments.json, segmentation.png and scene.png, plus map.nrrd for inputs
-// that were not grids, segments.pcd for point clouds and segmentation.pgm + segmentation.yaml (a
-// map_server map) for 2D maps (nz = 1), points.labels.npy and points.pcd (labels on the input
-// points) for .pcd clouds, segments.ot (a ColorOcTree) for OctoMap inputs; segments.ply on
-// request; then a summary on stdout (text or --json). All outputs or
-// none (OutputSet): until every file is complete the old files of DIR stay as they were; a
-// failure, out of memory or Ctrl-C removes the new files' temporaries.
+// and write its outputs (kOutputs: a compact set by default, the rest on request with --outputs);
+// then a summary on stdout (text or --json). All outputs or none (OutputSet): until every file is
+// complete the old files of DIR stay as they were; a failure, out of memory or Ctrl-C removes the
+// new files' temporaries. Files of kOutputs's names that an earlier run left in DIR and this run
+// did not write are removed in the same commit, so DIR then holds this run's set only.
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <array>
+#include <cctype>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -36,6 +43,7 @@ namespace {
 
 struct SegmentArgs {
   std::string input, out_dir;
+  std::string outputs = "default";
   PipelineArgs pipeline;
   InputArgs in;
   ReportArgs report;
@@ -43,13 +51,6 @@ struct SegmentArgs {
 
 double since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-
-// Outputs written only on request. Issue 27's --outputs LIST decides which; until it is merged
-// none is requested, and the on-request writers below are only reached through it.
-bool requested(const std::string& name) {
-  (void)name;
-  return false;
 }
 
 std::string base_name(const std::string& path) {
@@ -66,23 +67,179 @@ std::string picture_title(const std::string& input, const Grid& grid, const std:
   return title.str();
 }
 
-using Writer = std::function<void(const std::string&, StagedFiles&)>;
-using FileList = std::vector<std::pair<std::string, Writer>>;
+// Every file `occseg segment` can write, the order of writing. `by_default`: written without
+// --outputs; the others on request (--outputs NAME,... or all). The names are also what a later
+// run into the same DIR removes when it does not write them again.
+struct OutputInfo {
+  const char* name;
+  bool by_default;
+  const char* when;  // for whom it applies, in --help and in the error for one that does not
+};
+constexpr OutputInfo kOutputs[] = {
+    {"labels.nrrd", true, "always"},          // segment id per voxel, gzip-encoded NRRD (issue 27)
+    {"segments.json", true, "always"},
+    {"segmentation.png", true, "always"},
+    {"segmentation.pgm", true, "2D maps (nz = 1)"},
+    {"segmentation.yaml", true, "2D maps (nz = 1)"},
+    {"labels.npy", false, "always"},          // on request
+    {"map.nrrd", false, "inputs that are not grids (.pcd .graph .bt .ot .yaml)"},  // on request
+    {"segments.pcd", false, ".pcd/.graph inputs"},                                 // on request
+    {"scene.png", true, "always"},                    // the occupied segments in 3D (issue 25)
+    {"points.labels.npy", true, ".pcd inputs"},       // a label per input point (issue 26)
+    {"points.pcd", false, ".pcd inputs"},             // on request: the input cloud with a label field
+    // An OctoMap ColorOcTree by segment: by default for OctoMap inputs (.bt .ot .graph), on request
+    // for any other (Output::default_here).
+    {"segments.ot", false, "every input (by default for .bt/.ot/.graph)"},
+    {"segments.ply", false, "always"},                // on request: the occupied segments' surfaces
+};
 
-// The outputs, in the order written: a name and its writer. Out of line: GCC 12 inlines the
-// vector's growth into run() and then warns wrongly (-Warray-bounds) about its empty array.
-[[gnu::noinline]] void add_file(FileList& files, const char* name, Writer write) {
-  files.emplace_back(name, std::move(write));
+std::string output_names() {
+  std::string s;
+  for (const OutputInfo& o : kOutputs) s += (s.empty() ? "" : ", ") + std::string(o.name);
+  return s;
+}
+
+const OutputInfo* find_output(const std::string& name) {
+  for (const OutputInfo& o : kOutputs)
+    if (name == o.name) return &o;
+  return nullptr;
+}
+
+// --outputs LIST: file names of kOutputs, `default` (the default set) and `all` (every output
+// that applies to the input), comma-separated. Error(invalid_argument), exit 1, for any other.
+struct OutputChoice {
+  bool all = false, defaults = false;
+  std::vector<std::string> names;
+};
+OutputChoice parse_outputs(const std::string& list) {
+  OutputChoice c;
+  std::size_t at = 0;
+  for (;;) {
+    const std::size_t comma = list.find(',', at);
+    std::string item = list.substr(at, comma == std::string::npos ? std::string::npos : comma - at);
+    item.erase(0, item.find_first_not_of(" \t"));
+    item.erase(item.find_last_not_of(" \t") + 1);
+    if (item == "all") c.all = true;
+    else if (item == "default") c.defaults = true;
+    else if (find_output(item)) c.names.push_back(item);
+    else
+      throw Error(Status::invalid_argument,
+                  "--outputs: " + (item.empty() ? std::string("an empty name") : "'" + item + "'") +
+                      " is not an output of occseg segment (" + output_names() + ", default or all)");
+    if (comma == std::string::npos) break;
+    at = comma + 1;
+  }
+  return c;
+}
+
+// The same file (device and inode), so that an input that lives in DIR under an output's name is
+// never removed as an earlier run's file.
+bool same_file(const std::string& a, const std::string& b) {
+  struct stat sa {}, sb {};
+  return ::stat(a.c_str(), &sa) == 0 && ::stat(b.c_str(), &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
+bool is_regular_file(const std::string& p) {
+  struct stat st {};
+  return ::lstat(p.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+
+// --- a map too large for this machine fails before it is allocated -----------------------------
+
+// Bytes per voxel of `occseg segment` at its peak: the map (4), the labels (4) and the stages'
+// scratch beyond them (docs/performance.md: at most 6 with the labels), rounded up; the fusion
+// of a cloud (5 per voxel beside the map) stays below it.
+constexpr double kBytesPerVoxel = 10;
+
+// Memory the process can still take: MemAvailable, and what RLIMIT_AS leaves above the address
+// space in use. 0 when neither is known (no check then).
+double available_bytes() {
+  double avail = 0;
+  if (std::FILE* f = std::fopen("/proc/meminfo", "r")) {
+    char line[256];
+    while (std::fgets(line, sizeof line, f))
+      if (std::strncmp(line, "MemAvailable:", 13) == 0) avail = std::strtod(line + 13, nullptr) * 1024;
+    std::fclose(f);
+  }
+  rlimit as {};
+  if (::getrlimit(RLIMIT_AS, &as) == 0 && as.rlim_cur != RLIM_INFINITY) {
+    double used = 0;
+    if (std::FILE* f = std::fopen("/proc/self/statm", "r")) {
+      unsigned long pages = 0;
+      if (std::fscanf(f, "%lu", &pages) == 1) used = double(pages) * double(::sysconf(_SC_PAGESIZE));
+      std::fclose(f);
+    }
+    const double left = std::max(0.0, double(as.rlim_cur) - used);
+    avail = avail > 0 ? std::min(avail, left) : left;
+  }
+  return avail;
+}
+
+struct SizeCheckContext {
+  std::string input;
+  enum { grid, cloud, tree } kind = grid;
+  double voxel_size = 0;  // clouds: the voxel size in use
+  std::size_t approved = 0;  // the largest count passed: a later check of the same map passes too
+};
+SizeCheckContext g_size;
+
+std::string bytes_text(double b) {
+  char t[32];
+  if (b >= 1e9) std::snprintf(t, sizeof t, "%.1f GB", b / 1e9);
+  else std::snprintf(t, sizeof t, "%.0f MB", std::ceil(b / 1e6));
+  return t;
+}
+
+void check_map_size(const Dims& d) {
+  const std::size_t n = d.count();
+  if (n <= g_size.approved) return;
+  const double need = double(n) * kBytesPerVoxel, avail = available_bytes();
+  if (avail <= 0 || need <= avail) {
+    g_size.approved = n;
+    return;
+  }
+  char activity[160];
+  current_activity(activity, sizeof activity);
+  std::string m = std::string("out of memory while ") + (*activity ? activity : "reading " + g_size.input) + ": the map has " +
+                  std::to_string(d.nx) + " x " + std::to_string(d.ny) + " x " + std::to_string(d.nz) + " = " +
+                  std::to_string(n) + " voxels, which need " + bytes_text(need) + " (" + std::to_string(int(kBytesPerVoxel)) +
+                  " bytes per voxel), and " + bytes_text(avail) + " are available";
+  // Voxels scale with the cube of the voxel size (the square for a one-layer map).
+  const double scale = std::pow(need / avail, d.nz == 1 ? 0.5 : 1.0 / 3.0) * 1.01;
+  if (g_size.kind == SizeCheckContext::cloud) {
+    char t[64];
+    const double v = g_size.voxel_size * scale, step = std::pow(10.0, std::floor(std::log10(v)) - 1);
+    std::snprintf(t, sizeof t, "%g", std::ceil(v / step) * step);
+    m += std::string(": a voxel size of ") + t + " m or more would fit (--voxel-size)";
+  } else if (g_size.kind == SizeCheckContext::tree) {
+    m += ": a voxel size " + std::to_string(static_cast<long>(std::ceil(scale))) +
+         " times the one used or more would fit (--voxel-size, a multiple of the tree's resolution)";
+  } else {
+    m += " (the file holds that many voxels: segment it on a machine with more memory, or a part of it)";
+  }
+  throw Error(Status::no_memory, m);
 }
 
 int run(const SegmentArgs& o) {
   install_interrupt_handlers();  // Ctrl-C cancels through the progress callbacks
+  const OutputChoice choice = parse_outputs(o.outputs);  // a usage error before the long part
   Params params = make_params(o.pipeline);
   ProgressBar bar(stderr_is_terminal() && !o.report.quiet);
   params.progress = bar.segment_callback();
   MapInputOptions in = make_input_options(o.in, o.pipeline.threads);
   in.progress = bar.callback("fusing scans");
+  in.read_progress = bar.callback("reading " + base_name(o.input));
   OutputSet out(o.out_dir);  // first, so an unusable directory fails before the long part
+  {
+    std::string ext = o.input.substr(std::min(o.input.size(), o.input.rfind('.') == std::string::npos ? o.input.size() : o.input.rfind('.')));
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    g_size.input = base_name(o.input);
+    g_size.kind = ext == ".pcd" || ext == ".graph" ? SizeCheckContext::cloud
+                  : ext == ".bt" || ext == ".ot"   ? SizeCheckContext::tree
+                                                   : SizeCheckContext::grid;
+    g_size.voxel_size = in.voxel_size.value_or(0.05);
+    set_grid_size_check(check_map_size);
+  }
 
   std::vector<StageTime> steps;
   auto t = std::chrono::steady_clock::now();
@@ -96,74 +253,128 @@ int run(const SegmentArgs& o) {
 
   t = std::chrono::steady_clock::now();
   const std::string preset = preset_name(params.preset);
-  FileList files;
-  add_file(files, "labels.npy",
-                     [&](const std::string& f, StagedFiles& s) { write_labels_npy(f, r.dims, r.labels, &s); });
+  // Each output: its name, whether it applies to this input, and its writer (given the progress
+  // of its own bytes, 0..1).
+  using Writer = std::function<void(const std::string&, StagedFiles&, const IoProgress&)>;
+  struct Output {
+    std::string name;
+    bool applies;
+    Writer write;
+    bool default_here = false;  // in the default set for this input although not in every one's
+  };
+  const bool map2d = grid.dims.nz == 1;
+  std::vector<std::uint8_t> states;  // for the 2D pair, made only when it is written
+  NrrdWriteOptions gz;
+  gz.gzip = true;
+  gz.threads = o.pipeline.threads;
+  std::vector<Output> files;
   // In the input's space (an LPS volume's labels in LPS, lying on it in 3D Slicer).
-  add_file(files, "labels.nrrd", [&](const std::string& f, StagedFiles& s) {
-    write_labels_nrrd(f, grid, r.labels, input.nrrd_space, &s);
-  });
-  if (input.kind != InputKind::volume)
-    add_file(files, "map.nrrd", [&](const std::string& f, StagedFiles& s) { write_grid_nrrd(f, grid, "", &s); });
-  if (input.kind == InputKind::cloud && have_pcl())
-    add_file(files, "segments.pcd",
-                       [&](const std::string& f, StagedFiles& s) { write_cloud_output(f, grid, r, &s); });
+  files.push_back({"labels.nrrd", true, [&](const std::string& f, StagedFiles& s, const IoProgress& p) {
+                     NrrdWriteOptions w = gz;
+                     w.progress = p;
+                     write_labels_nrrd(f, grid, r.labels, input.nrrd_space, &s, w);
+                   }});
+  files.push_back({"segments.json", true, [&](const std::string& f, StagedFiles& s, const IoProgress&) {
+                     // With the map's frame and each segment's oriented box, in metres (occseg/boxes.hpp).
+                     const std::vector<OrientedBox> boxes = oriented_boxes(r, grid.voxel_size, grid.origin);
+                     write_file_atomically(
+                         f,
+                         [&](std::ostream& os) {
+                           write_segments_json(os, r, preset, {grid.voxel_size, grid.origin, &boxes});
+                         },
+                         &s);
+                   }});
+  files.push_back({"segmentation.png", true, [&](const std::string& f, StagedFiles& s, const IoProgress&) {
+                     const Dims& d = grid.dims;
+                     write_segmentation_png(f,
+                                            "occseg segment " + base_name(o.input) + "  (" + std::to_string(d.nx) +
+                                                " x " + std::to_string(d.ny) + " x " + std::to_string(d.nz) +
+                                                ", preset " + preset + ")",
+                                            grid, r, nullptr, &s);
+                   }});
+  // A 2D map: also as the PGM/YAML pair map_server (a 2D planner) loads.
+  files.push_back({"segmentation.pgm", map2d, [&](const std::string& f, StagedFiles& s, const IoProgress&) {
+                     if (states.empty()) states = voxel_states(r);
+                     write_state_pgm(f, grid.dims, states, &s);
+                   }});
+  files.push_back({"segmentation.yaml", map2d, [&](const std::string& f, StagedFiles& s, const IoProgress&) {
+                     write_map_yaml(f, "segmentation.pgm", grid, &s);
+                   }});
+  files.push_back({"labels.npy", true, [&](const std::string& f, StagedFiles& s, const IoProgress&) {
+                     write_labels_npy(f, r.dims, r.labels, &s);
+                   }});
+  files.push_back({"map.nrrd", input.kind != InputKind::volume,
+                   [&](const std::string& f, StagedFiles& s, const IoProgress& p) {
+                     NrrdWriteOptions w = gz;
+                     w.progress = p;
+                     write_grid_nrrd(f, grid, "", &s, w);
+                   }});
+  files.push_back({"segments.pcd", input.kind == InputKind::cloud && have_pcl(),
+                   [&](const std::string& f, StagedFiles& s, const IoProgress&) {
+                     write_cloud_output(f, grid, r, &s);
+                   }});
+  const std::string scene_title = picture_title(o.input, grid, preset);
+  files.push_back({"scene.png", true, [&](const std::string& f, StagedFiles& s, const IoProgress&) {
+                     write_scene_png(f, scene_title, grid, r, &s);
+                   }});
   // Labels back on the input points (issue 26), for .pcd inputs; computed once for both files.
   std::vector<std::uint32_t> point_labels;
-  if (input.point_labels) {
-    point_labels = input.point_labels(grid, r);
-    // default (outputs-plan): uint32, one label per input point in file order ([height, width]
-    // for an organized cloud), UINT32_MAX for NaN points
-    add_file(files, "points.labels.npy", [&](const std::string& f, StagedFiles& s) {
-      write_npy(f, "<u4", input.point_shape, point_labels.data(), point_labels.size() * sizeof(std::uint32_t), &s);
-    });
-  }
-  if (input.write_points_pcd)  // on request (outputs-plan): the input cloud with a label field
-    add_file(files, "points.pcd", [&](const std::string& f, StagedFiles& s) {
-      input.write_points_pcd(f, point_labels, s);
-    });
-  std::vector<std::uint8_t> states;
-  if (grid.dims.nz == 1) {  // a 2D map: also as the PGM/YAML pair map_server (a 2D planner) loads
-    states = voxel_states(r);
-    add_file(files, "segmentation.pgm",
-                       [&](const std::string& f, StagedFiles& s) { write_state_pgm(f, grid.dims, states, &s); });
-    add_file(files, "segmentation.yaml", [&](const std::string& f, StagedFiles& s) {
-      write_map_yaml(f, "segmentation.pgm", grid, &s);
-    });
-  }
-  add_file(files, "segments.json", [&](const std::string& f, StagedFiles& s) {
-    // With the map's frame and each segment's oriented box, in metres (occseg/boxes.hpp).
-    const std::vector<OrientedBox> boxes = oriented_boxes(r, grid.voxel_size, grid.origin);
-    write_file_atomically(
-        f, [&](std::ostream& os) { write_segments_json(os, r, preset, {grid.voxel_size, grid.origin, &boxes}); }, &s);
-  });
-  // segments.ot (an OctoMap ColorOcTree coloured by segment, for octovis and RViz): default for
-  // OctoMap inputs (.bt/.ot/.graph), on request (--outputs) for any other input.
+  bool point_labels_done = false;
+  auto labels_of_points = [&]() -> const std::vector<std::uint32_t>& {
+    if (!point_labels_done) point_labels = input.point_labels(grid, r), point_labels_done = true;
+    return point_labels;
+  };
+  // uint32, one label per input point in file order ([height, width] for an organized cloud),
+  // UINT32_MAX for NaN points.
+  files.push_back({"points.labels.npy", bool(input.point_labels),
+                   [&](const std::string& f, StagedFiles& s, const IoProgress&) {
+                     const std::vector<std::uint32_t>& l = labels_of_points();
+                     write_npy(f, "<u4", input.point_shape, l.data(), l.size() * sizeof(std::uint32_t), &s);
+                   }});
+  files.push_back({"points.pcd", bool(input.point_labels) && bool(input.write_points_pcd),
+                   [&](const std::string& f, StagedFiles& s, const IoProgress&) {
+                     input.write_points_pcd(f, labels_of_points(), s);
+                   }});
+  // segments.ot (a ColorOcTree coloured by segment, for octovis and RViz's OctoMap display).
   std::array<double, 3> ot_shift{0, 0, 0};
   bool ot_snapped = false;
-  if (have_octomap() && (is_octomap_input(o.input) || requested("segments.ot")))
-    add_file(files, "segments.ot", [&](const std::string& f, StagedFiles& s) {
-      ot_snapped = write_octree_output(f, grid, r, &s, &ot_shift);
-    });
-  // segments.ply (the occupied segments' surfaces, binary PLY, colour per vertex, segment per
-  // face, metres): on request (--outputs).
-  if (requested("segments.ply"))
-    add_file(files, "segments.ply", [&](const std::string& f, StagedFiles& s) {
-      write_segments_ply(f, r, grid.voxel_size, grid.origin, &s);
-    });
-  add_file(files, "segmentation.png", [&](const std::string& f, StagedFiles& s) {
-    const Dims& d = grid.dims;
-    write_segmentation_png(f,
-                           "occseg segment " + base_name(o.input) + "  (" + std::to_string(d.nx) + " x " +
-                               std::to_string(d.ny) + " x " + std::to_string(d.nz) + ", preset " + preset + ")",
-                           grid, r, nullptr, &s);
-  });
-  // Default output (issue 25): the 3D picture of the occupied segments.
-  const std::string scene_title = picture_title(o.input, grid, preset);
-  add_file(files, "scene.png", [&](const std::string& f, StagedFiles& s) { write_scene_png(f, scene_title, grid, r, &s); });
-  for (std::size_t k = 0; k < files.size(); ++k) {
-    bar.update("writing " + files[k].first, double(k) / double(files.size()));
-    out.write(files[k].first, files[k].second);
+  files.push_back({"segments.ot", have_octomap(),
+                   [&](const std::string& f, StagedFiles& s, const IoProgress&) {
+                     ot_snapped = write_octree_output(f, grid, r, &s, &ot_shift);
+                   },
+                   is_octomap_input(o.input)});
+  // segments.ply: the occupied segments' surfaces, binary PLY, colour per vertex, segment per face.
+  files.push_back({"segments.ply", true, [&](const std::string& f, StagedFiles& s, const IoProgress&) {
+                     write_segments_ply(f, r, grid.voxel_size, grid.origin, &s);
+                   }});
+  // What to write: named ones must apply (a usage error otherwise, before anything is written).
+  for (const std::string& n : choice.names) {
+    const auto it = std::find_if(files.begin(), files.end(), [&](const Output& f) { return f.name == n; });
+    if (it != files.end() && !it->applies)
+      throw Error(Status::invalid_argument, "--outputs: " + n + " does not apply to this input (it is written for " +
+                                                find_output(n)->when + ")");
+  }
+  std::vector<const Output*> chosen;
+  for (const Output& f : files) {
+    const OutputInfo* info = find_output(f.name);
+    const bool named = std::find(choice.names.begin(), choice.names.end(), f.name) != choice.names.end();
+    const bool by_default = (info && info->by_default) || f.default_here;
+    if (f.applies && (choice.all || named || (choice.defaults && by_default))) chosen.push_back(&f);
+  }
+  for (std::size_t k = 0; k < chosen.size(); ++k) {
+    const std::string label = "writing " + chosen[k]->name;
+    const double share = 1.0 / double(chosen.size()), before = double(k) * share;
+    bar.update(label, before);
+    const IoProgress progress = [&bar, label, before, share](double f) { return bar.update(label, before + share * f); };
+    out.write(chosen[k]->name, [&](const std::string& f, StagedFiles& s) { chosen[k]->write(f, s, progress); });
+  }
+  bar.update("writing", 1.0);
+  // Files an earlier run left under an output's name, not written now: removed in the commit
+  // (regular files only; the input itself never).
+  for (const OutputInfo& info : kOutputs) {
+    const std::string p = out.path(info.name);
+    const bool written = std::any_of(chosen.begin(), chosen.end(), [&](const Output* f) { return f->name == info.name; });
+    if (!written && is_regular_file(p) && !same_file(p, o.input)) out.remove(info.name);
   }
   steps.push_back({"write", since(t)});
 
@@ -175,6 +386,7 @@ int run(const SegmentArgs& o) {
   rep.result = &r;
   rep.steps = steps;
   rep.files = out.files();
+  rep.removed = out.removed();
   rep.top = o.report.top;
   // The summary is made before the files are put in place, so running out of memory here still
   // leaves the old files; after the commit only writing it to stdout can fail.
@@ -212,6 +424,12 @@ Runner add_segment(CLI::App& app) {
                 ".graph OctoMap scan graph, .bt/.ot OctoMap tree")
       ->required();
   c->add_option("--out,-o", o->out_dir, "output directory (created if missing)")->required();
+  c->add_option("--outputs", o->outputs,
+                "comma-separated files to write: default (" + std::string("labels.nrrd, segments.json, "
+                "segmentation.png, scene.png; 2D maps also segmentation.pgm + .yaml; .pcd inputs "
+                "points.labels.npy; OctoMap inputs segments.ot), all (every file that applies "
+                "to the input), or names among: ") + output_names())
+      ->type_name("LIST");
   add_pipeline_options(c, o->pipeline);
   add_input_options(c, o->in);
   add_report_options(c, o->report);

@@ -189,12 +189,11 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
   if (ext == ".npy" || ext == ".nrrd") {
     in.kind = InputKind::volume;
     if (ext == ".npy") {
-      const NpyArray a = read_npy(path);
-      in.format = "NumPy .npy, " + npy_type(a.descr) + (a.big_endian ? " big-endian" : "") +
-                  (a.fortran_order ? ", Fortran order" : ", C order");
-      in.grid = grid_from_npy(a, o.voxel_size.value_or(1.0), path);
+      NpyArray a;
+      in.grid = read_npy_grid(path, o.voxel_size.value_or(1.0), &a, o.read_progress);
+      in.format = "NumPy .npy, " + npy_type(a.descr) + (a.big_endian ? " big-endian" : "") + (a.fortran_order ? ", Fortran order" : ", C order");
     } else {
-      const NrrdVolume v = read_nrrd(path);
+      const NrrdVolume v = read_nrrd(path, o.read_progress);
       in.format = std::string("NRRD, ") + nrrd_type_name(v.type);
       if (!v.space.empty() && v.space != kNrrdDefaultSpace) in.format += ", " + v.space + " coordinates";
       in.grid = grid_from_nrrd(v, path);
@@ -253,6 +252,7 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
     if (coarsen && o.coarsen != "max" && o.coarsen != "mean")
       throw Error(Status::invalid_argument, "--coarsen '" + o.coarsen + "' is not max or mean");
     t.coarsen = o.coarsen == "mean" ? Coarsen::mean : Coarsen::max;
+    t.progress = o.read_progress;
     {
       SilenceStderr quiet;
       in.grid = read_octree_file(path, t);

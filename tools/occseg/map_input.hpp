@@ -24,6 +24,8 @@ struct MapInputOptions {
   std::string coarsen;                            // trees at a coarser voxel size: max or mean; empty: max
   int threads = 0;
   std::function<bool(double fraction)> progress;  // clouds: fusion progress (ScanOptions::progress)
+  // Progress of reading the file (.npy, .nrrd, .bt, .ot): fraction 0..1; false cancels.
+  std::function<bool(double fraction)> read_progress;
 };
 
 enum class InputKind { volume, cloud, tree, map2d };  // map2d: a map_server .yaml map

@@ -68,6 +68,12 @@ void OutputSet::write(const std::vector<std::string>& names, const std::function
   check_interrupted();
 }
 
+void OutputSet::remove(const std::string& name) {
+  removed_.reserve(removed_.size() + 1);
+  staged_.remove_on_commit(path(name));
+  removed_.push_back(path(name));
+}
+
 void OutputSet::commit() {
   sigset_t stop, old;
   sigemptyset(&stop);

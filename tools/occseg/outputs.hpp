@@ -27,6 +27,9 @@ class OutputSet {
   void write(const std::string& name, const std::function<void(const std::string& path, StagedFiles& staged)>& write);
   // The same for a writer that stages several files (`names`, in DIR) at once.
   void write(const std::vector<std::string>& names, const std::function<void(StagedFiles& staged)>& write);
+  // Removes DIR/name in the commit (StagedFiles::remove_on_commit): a file of an earlier run that
+  // this set does not replace. Listed by removed().
+  void remove(const std::string& name);
   // Replaces the old files with the staged ones: with SIGINT and SIGTERM blocked, throws
   // Error(cancelled) if one arrived before, else renames everything (StagedFiles::commit).
   void commit();
@@ -35,10 +38,11 @@ class OutputSet {
   std::string path(const std::string& name) const { return dir_ + "/" + name; }
   // The files of the set, in the order written.
   const std::vector<std::string>& files() const { return files_; }
+  const std::vector<std::string>& removed() const { return removed_; }
 
  private:
   std::string dir_;
-  std::vector<std::string> files_, created_dirs_;  // created_dirs_: innermost last
+  std::vector<std::string> files_, removed_, created_dirs_;  // created_dirs_: innermost last
   StagedFiles staged_;
 };
 

@@ -1,6 +1,7 @@
 #include "progress.hpp"
 
 #include <pthread.h>
+#include <fcntl.h>
 #include <sys/ioctl.h>
 #include <unistd.h>
 
@@ -86,6 +87,10 @@ double ProgressBar::default_delay() {
 
 ProgressBar::ProgressBar(bool enabled, double delay)
     : enabled_(enabled), delay_(delay), start_(std::chrono::steady_clock::now()) {
+  // The terminal as it is now: readers that silence a library's chatter (OctoMap's) point fd 2
+  // at /dev/null for a while, and the bar must still reach the terminal then.
+  if (enabled_) fd_ = ::fcntl(STDERR_FILENO, F_DUPFD_CLOEXEC, 3);
+  if (fd_ < 0) enabled_ = false;
   if (enabled_) ticker_ = std::thread([this] { tick(); });
 }
 
@@ -97,6 +102,7 @@ ProgressBar::~ProgressBar() {
   wake_.notify_all();
   if (ticker_.joinable()) ticker_.join();
   clear();
+  if (fd_ >= 0) ::close(fd_);
 }
 
 double ProgressBar::elapsed() const {
@@ -128,8 +134,11 @@ bool ProgressBar::update(const std::string& label, double fraction) {
   label_ = label;
   fraction_ = fraction;
   active_ = true;
-  // A new phase shows at once; otherwise the ticker redraws (at most ten times a second).
-  if (label != drawn_label_ && elapsed() >= delay_) draw_locked();
+  // A new phase, or a new whole percent of it, shows at once (so a phase that ends between two
+  // ticks still shows how far it got: at most 101 lines per phase); otherwise the ticker redraws
+  // ten times a second, for the clock.
+  const int percent = static_cast<int>(std::clamp(fraction, 0.0, 1.0) * 100 + 0.5);
+  if ((label != drawn_label_ || percent != drawn_percent_) && elapsed() >= delay_) draw_locked();
   return !g_signal;
 }
 
@@ -144,9 +153,10 @@ void ProgressBar::draw_locked() {
   const std::size_t max = static_cast<std::size_t>(terminal_width() - 1);
   if (line.size() > max) line.resize(max);
   line = "\r" + line + "\033[K";
-  if (::write(STDERR_FILENO, line.data(), line.size()) < 0) enabled_ = false;
+  if (::write(fd_, line.data(), line.size()) < 0) enabled_ = false;
   drawn_ = true;
   drawn_label_ = label_;
+  drawn_percent_ = static_cast<int>(fraction * 100 + 0.5);
 }
 
 void ProgressBar::clear() {
@@ -155,7 +165,7 @@ void ProgressBar::clear() {
   drawn_label_.clear();
   if (!drawn_) return;
   static const char erase[] = "\r\033[K";
-  if (::write(STDERR_FILENO, erase, sizeof erase - 1) < 0) enabled_ = false;
+  if (::write(fd_, erase, sizeof erase - 1) < 0) enabled_ = false;
   drawn_ = false;
 }
 

@@ -70,6 +70,8 @@ class ProgressBar {
   double fraction_ = 0;
   bool active_ = false;       // ...shown until clear()
   std::string drawn_label_;
+  int drawn_percent_ = -1;
+  int fd_ = -1;               // a duplicate of stderr, taken at construction
   bool drawn_ = false;
   bool stop_ = false;
   std::mutex mutex_;

@@ -126,6 +126,11 @@ void print_summary(std::ostream& out, const RunReport& run) {
     for (const std::string& f : run.files) out << " " << f;
     out << "\n";
   }
+  if (!run.removed.empty()) {
+    out << "removed (an earlier run's, not written now):";
+    for (const std::string& f : run.removed) out << " " << f;
+    out << "\n";
+  }
 }
 
 json summary_json(const RunReport& run) {
@@ -157,7 +162,8 @@ json summary_json(const RunReport& run) {
           {"voxels", {{"free", vox[0]}, {"unknown", vox[1]}, {"occupied", vox[2]}}},
           {"largest_objects", objects},
           {"seconds", times},
-          {"files", run.files}};
+          {"files", run.files},
+          {"removed", run.removed}};
 }
 
 void write_segmentation_png(const std::string& path, const std::string& title, const Grid& grid, const Result& r,

@@ -25,6 +25,7 @@ struct RunReport {
   const Result* result = nullptr;
   std::vector<StageTime> steps;   // "read", the pipeline stages, "write", ... in order
   std::vector<std::string> files; // written
+  std::vector<std::string> removed; // earlier runs' outputs removed from the folder
   std::size_t top = 5;            // number of largest objects to list
 };
 

@@ -15,6 +15,25 @@ namespace occseg {
 // read 'path': <reason>".
 std::string read_file(const std::string& path);
 
+// A regular file opened with the checks of read_file, for readers that read it in pieces
+// straight into their own arrays (no copy of the whole file first).
+class InputFile {
+ public:
+  explicit InputFile(const std::string& path);  // the errors of read_file
+  ~InputFile();
+  InputFile(const InputFile&) = delete;
+  InputFile& operator=(const InputFile&) = delete;
+  std::size_t size() const { return size_; }  // when it was opened
+  // Reads up to `n` bytes into `buf`; fewer only at the end of the file. Throws Error(io)
+  // "cannot read 'path': <reason>".
+  std::size_t read(void* buf, std::size_t n);
+
+ private:
+  std::string path_;
+  int fd_ = -1;
+  std::size_t size_ = 0;
+};
+
 // Throws the same errors when `path` cannot be opened for reading or is not a regular file, for
 // readers that hand the path on to a library (PCL, OctoMap).
 void check_readable(const std::string& path);

@@ -75,9 +75,16 @@ class StagedFiles {
   // directories. If a rename fails, the targets replaced before it get their old files back
   // (they are swapped, not overwritten: renameat2 RENAME_EXCHANGE; on a file system without it
   // a plain rename is used and such a target cannot be restored, which the error then says),
-  // the temporaries are removed, and Error(io) names the file. A set commits at most once; an
+  // the temporaries are removed, and Error(io) names the file. The removals (remove_on_commit)
+  // follow the renames in the same step and are undone with them. A set commits at most once; an
   // empty set commits nothing.
   void commit();
+
+  // Removes the file `path` as part of commit(): at the renames it is moved aside to a
+  // temporary name (and put back if the commit fails), then deleted once every file is in place.
+  // A path that is gone by then is no error. For files an earlier run wrote that the new set
+  // does not contain; the caller decides which those are.
+  void remove_on_commit(const std::string& path);
 
   // Removes the temporaries of a set not committed and forgets them (the destructor does this).
   void discard() noexcept;
@@ -91,6 +98,7 @@ class StagedFiles {
     std::string path, tmp;
   };
   std::vector<File> files_;
+  std::vector<std::string> removals_;
   bool committed_ = false;
 };
 

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "occseg/grid.hpp"
+#include "occseg/io_progress.hpp"
 #include "occseg/uninit_vector.hpp"
 
 namespace occseg {
@@ -27,6 +28,19 @@ struct NpyArray {
 // element count beyond 2^40 or a file shorter than its header claims.
 NpyArray read_npy(const std::string& path);
 NpyArray parse_npy(const unsigned char* bytes, std::size_t size, const std::string& name);
+
+// The header of an .npy file held in bytes[0, size) (at least the whole header): the array
+// without its data, and the offset where the data starts. The errors of parse_npy, except that
+// the data is not looked at.
+NpyArray parse_npy_header(const unsigned char* bytes, std::size_t size, const std::string& name,
+                          std::size_t& data_offset);
+
+// read_npy + grid_from_npy in one pass over the file: the header is read and checked (file
+// size, dims, dtype, geometry) before anything is allocated, then the samples go straight from
+// the file into the grid (float32 in C order) or into one buffer that is converted. Same errors
+// as the pair. `header` (if given) gets the header's fields; `progress`: the fraction read.
+Grid read_npy_grid(const std::string& path, double voxel_size, NpyArray* header = nullptr,
+                   const IoProgress& progress = {});
 
 // Writes a C-order array atomically (write_file_atomically), or stages it `into` a set of files
 // replaced together.

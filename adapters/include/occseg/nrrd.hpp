@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "occseg/grid.hpp"
+#include "occseg/io_progress.hpp"
 #include "occseg/uninit_vector.hpp"
 
 namespace occseg {
@@ -39,11 +40,23 @@ struct NrrdVolume {
   std::vector<unsigned char> data;          // samples in host byte order, x fastest
 };
 
-// Reads a .nrrd file with encoding raw or ascii (text/txt), little or big endian, dimension 2 or
-// 3, axis-aligned space directions. Throws Error(io) when it cannot be read, Error(format) for a
-// malformed or truncated file, Error(unsupported) for gzip/bzip2 encodings, detached data files,
-// rotated or flipped axes, or an unsupported type; messages name the file.
-NrrdVolume read_nrrd(const std::string& path);
+// Reads a .nrrd file with encoding raw, gzip (gz; what 3D Slicer saves by default) or ascii
+// (text/txt), little or big endian, dimension 2 or 3, axis-aligned space directions. Throws
+// Error(io) when it cannot be read, Error(format) for a malformed or truncated file, gzip data
+// that is truncated or corrupt or decompresses to more or fewer bytes than the sizes say (never
+// more than those bytes are decompressed), Error(unsupported) for bzip2 or other encodings,
+// detached data files, rotated or flipped axes, or an unsupported type; messages name the file.
+// `progress`: the fraction of the gzip data inflated.
+NrrdVolume read_nrrd(const std::string& path, const IoProgress& progress = {});
+
+// How write_nrrd stores the samples: raw, or gzip-compressed (zlib `level`, 1 fastest; on up to
+// `threads` threads, 0 all cores, the file the same for any count; see write_gzip).
+struct NrrdWriteOptions {
+  bool gzip = false;
+  int level = 1;
+  int threads = 0;
+  IoProgress progress;  // fraction of the samples written
+};
 
 // A map from a volume: float/double probabilities in [0, 1], uint8/uint16 scaled 0..max to
 // 0..1. Spacing must be isotropic (the voxel size); the grid origin is the corner of the first
@@ -54,7 +67,7 @@ Grid grid_from_nrrd(const NrrdVolume& v, const std::string& name);
 // The space written when none is given: occseg's world x, y, z as 3D Slicer's R, A, S.
 inline const char* const kNrrdDefaultSpace = "right-anterior-superior";
 
-// Writes raw little-endian data with the grid geometry above, atomically (write_file_atomically),
+// Writes little-endian data (raw, or gzip per `options`) with the grid geometry above, atomically (write_file_atomically),
 // in `space` (a 3D space's name as teem spells it; empty: kNrrdDefaultSpace), or stages it
 // `into` a set of files replaced together. Throws Error(invalid_argument) for a name that is no
 // 3D NRRD space, and Error(bad_value), writing nothing, when read_nrrd + grid_from_nrrd would
@@ -62,11 +75,13 @@ inline const char* const kNrrdDefaultSpace = "right-anterior-superior";
 // centre).
 void write_nrrd(const std::string& path, NrrdType type, const Dims& dims, double voxel_size,
                 const std::array<double, 3>& corner_origin, const void* data, std::size_t bytes,
-                const std::string& content = "", const std::string& space = "", StagedFiles* into = nullptr);
+                const std::string& content = "", const std::string& space = "", StagedFiles* into = nullptr,
+                const NrrdWriteOptions& options = {});
 // A map as float, and a label volume (uint32, same geometry as `grid`), in `space` as above.
 void write_grid_nrrd(const std::string& path, const Grid& grid, const std::string& space = "",
-                     StagedFiles* into = nullptr);
+                     StagedFiles* into = nullptr, const NrrdWriteOptions& options = {});
 void write_labels_nrrd(const std::string& path, const Grid& grid, const LabelArray& labels,
-                       const std::string& space = "", StagedFiles* into = nullptr);
+                       const std::string& space = "", StagedFiles* into = nullptr,
+                       const NrrdWriteOptions& options = {});
 
 }  // namespace occseg

@@ -2,6 +2,7 @@
 // dense grid, .graph scan graphs fused into one. Code holding octomap::OcTree objects can use
 // occseg/octomap_tree.hpp instead.
 #pragma once
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -25,6 +26,8 @@ struct OctreeOptions {
   // grid. Empty: the tree's metric bounding box (all known leaves, free and occupied).
   std::optional<Box> bbox;
   Coarsen coarsen = Coarsen::max;
+  // Progress of read_octree_file and grid_from_octree (fraction 0..1; false cancels).
+  std::function<bool(double fraction)> progress;
   // Throws Error(invalid_argument) naming a field that is out of range.
   void validate() const;
 };

@@ -45,8 +45,16 @@ struct Grid {
 constexpr std::size_t kMaxVoxels = std::size_t(1) << 40;
 
 // Throws Error(bad_dims) naming the problem when a dimension is zero or the product overflows
-// or exceeds kMaxVoxels.
+// or exceeds kMaxVoxels; then calls the size check, if one is set.
 void check_dims(const Dims& d);
+
+// A check of a map's size against the memory it will take, called by check_dims after its own
+// checks: every reader calls check_dims once it knows the dims and before it allocates the grid,
+// so a map too large for the machine can fail there, with the numbers, instead of when memory
+// runs out. It throws to refuse (the `occseg` command: Error(no_memory) naming the voxel count,
+// the bytes needed and what would fit). None by default; set it before other threads start.
+using GridSizeCheck = void (*)(const Dims& dims);
+void set_grid_size_check(GridSizeCheck check);
 
 // Throws Error(bad_value) naming the first voxel (x, y, z) whose value is NaN, infinite or
 // outside [0, 1].

@@ -9,6 +9,12 @@
 
 namespace occseg {
 
+namespace {
+GridSizeCheck g_size_check = nullptr;
+}  // namespace
+
+void set_grid_size_check(GridSizeCheck check) { g_size_check = check; }
+
 void check_dims(const Dims& d) {
   if (d.nx == 0 || d.ny == 0 || d.nz == 0)
     throw Error(Status::bad_dims, "dimensions " + std::to_string(d.nx) + " x " +
@@ -19,6 +25,7 @@ void check_dims(const Dims& d) {
     throw Error(Status::bad_dims, "dimensions " + std::to_string(d.nx) + " x " +
                                       std::to_string(d.ny) + " x " + std::to_string(d.nz) +
                                       " exceed the limit of 2^40 voxels");
+  if (g_size_check) g_size_check(d);
 }
 
 Grid::Grid(Dims d, float fill, double vs) : dims(d), voxel_size(vs) {
@@ -38,6 +45,8 @@ void check_probabilities(const Grid& g) {
     throw Error(Status::bad_value, "voxel size " + std::to_string(g.voxel_size) +
                                        " is not a positive finite number");
   const float* const p = g.values();
+  // The vectorised check first; the loop below only looks for the first bad voxel to name it.
+  if (probabilities_in_range(p, g.value_count())) return;
   for (std::size_t i = 0; i < g.value_count(); ++i) {
     const float v = p[i];
     if (!(v >= 0.0f && v <= 1.0f)) {  // also catches NaN

@@ -1,4 +1,4 @@
-// .nrrd reader: header fields, raw and ascii encodings, endianness, geometry.
+// .nrrd reader: header fields, raw, gzip (one or several members) and ascii encodings, endianness, geometry.
 #include "fuzz_common.hpp"
 #include "occseg/nrrd.hpp"
 
