@@ -43,7 +43,9 @@ Writer writer_of(const occseg_result* r, const occseg::Grid& frame, const std::s
     return [&res](const std::string& f, occseg::StagedFiles& s) { occseg::write_labels_npy(f, res.dims, res.labels, &s); };
   if (name == "labels.nrrd")
     return [&res, &frame, r](const std::string& f, occseg::StagedFiles& s) {
-      occseg::write_labels_nrrd(f, frame, res.labels, r->nrrd_space, &s);
+      occseg::NrrdWriteOptions gz;  // gzip-encoded, byte for byte as the command writes it
+      gz.gzip = true;
+      occseg::write_labels_nrrd(f, frame, res.labels, r->nrrd_space, &s, gz);
     };
   if (name == "segments.json")
     return [&res, r](const std::string& f, occseg::StagedFiles& s) {

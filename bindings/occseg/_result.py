@@ -257,15 +257,16 @@ class Result(Owned):
 
     def write(self, directory, outputs=None):
         """Writes the command's output files into `directory`, all or nothing (on an error every
-        file there stays as it was; occseg_result_write_outputs). `outputs`: None for labels.npy,
-        labels.nrrd (with the map's voxel size and origin), segments.json (with the map's frame
-        and the oriented boxes) and, for a 2D map, segmentation.pgm + segmentation.yaml; "all" for
-        those and segments.ply; or a list of file names. With a library older than
+        file there stays as it was; occseg_result_write_outputs). `outputs`: None for the command's
+        default set as far as the library writes it: labels.nrrd (gzip-encoded, with the map's
+        voxel size and origin), segments.json (with the map's frame and the oriented boxes) and,
+        for a 2D map, segmentation.pgm + segmentation.yaml, byte for byte as the command writes
+        them; "all" for those, labels.npy and segments.ply; or a list of file names. With a library older than
         occseg_result_write_outputs, only None works and writes labels.npy + segments.json. A path
         holding a NUL character raises OccsegValueError (C would see only the text before it)."""
         d = path_bytes("occseg.Result.write", "directory", directory)
         if outputs is None:
-            names = ["labels.npy", "labels.nrrd", "segments.json"]
+            names = ["labels.nrrd", "segments.json"]
         elif isinstance(outputs, str) and outputs == "all":
             names = list(self.LIBRARY_OUTPUTS)
         elif isinstance(outputs, str):

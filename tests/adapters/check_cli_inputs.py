@@ -50,7 +50,7 @@ def check(name, args, cloud=False, grid=False, octomap=False):
     files = sorted(os.listdir(out))
     want = ["labels.npy", "labels.nrrd", "scene.png", "segmentation.png", "segments.json"] + ([] if grid else ["map.nrrd"]) + (
         ["segments.pcd"] if cloud else []) + (["points.labels.npy", "points.pcd"] if name.startswith("pcd") else []) + (
-        ["segments.ot"] if octomap else [])
+        ["segments.ot", "segments.ply"])  # --outputs all: segments.ot applies to any input
     assert files == sorted(want), (name, files)
     if octomap:  # a ColorOcTree at the map's voxel size (its leaves: tests/adapters/test_segments_octree.cpp)
         head = open(os.path.join(out, "segments.ot"), "rb").read(200).split(b"\ndata\n")[0].decode()

@@ -138,6 +138,9 @@ TEST(GzipNrrd, LabelsWrittenGzipReadBackEqualOnAnyThreadCount) {
 // A removal staged with the new files: done by the commit, undone when the commit fails, and
 // nothing removed by a set that is discarded.
 TEST(StagedRemovals, RemovedAtTheCommitKeptWhenDiscarded) {
+  // A folder of its own: the other tests of this binary, run in parallel, stage files beside theirs.
+  fs::create_directories(tmp("staged"));
+  auto tmp = [](const std::string& name) { return ::tmp("staged/" + name); };
   const std::string old_file = tmp("old_output.npy"), keep = tmp("mine.txt");
   fs::remove(tmp("new.json"));
   std::ofstream(old_file) << "old";

@@ -98,7 +98,7 @@ for native, big in (("<f4", ">f4"), ("<f8", ">f8"), ("<u2", ">u2")):
     assert "big-endian" in b["format"] and "big-endian" not in a["format"], (a["format"], b["format"])
     assert same_map(a, b), (big, a, b)
     for d in ("le", "be"):
-        r = run("segment", f"{d}.npy", "--out", f"seg_{d}", "--quiet")
+        r = run("segment", f"{d}.npy", "--out", f"seg_{d}", "--outputs", "labels.npy", "--quiet")
         assert r.returncode == 0, r.stderr
     assert np.array_equal(np.load(os.path.join(work, "seg_le", "labels.npy")),
                           np.load(os.path.join(work, "seg_be", "labels.npy"))), big

@@ -42,21 +42,21 @@ np.save(os.path.join(work, "map.npy"), m)
 # --- the default set, and --outputs -----------------------------------------------------------
 r = run("segment", "map.npy", "--out", "dflt", "--json")
 assert r.returncode == 0, r.stderr
-assert sorted(os.listdir(os.path.join(work, "dflt"))) == ["labels.nrrd", "segmentation.png", "segments.json"]
+assert sorted(os.listdir(os.path.join(work, "dflt"))) == ["labels.nrrd", "scene.png", "segmentation.png", "segments.json"]
 head, samples = nrrd(os.path.join(work, "dflt", "labels.nrrd"))
 assert "\nencoding: gzip\n" in head and "\ntype: uint32\n" in head and "\nsizes: 16 20 24\n" in head, head
 
 r = run("segment", "map.npy", "--out", "all", "--outputs", "all")
 assert r.returncode == 0, r.stderr
-assert sorted(os.listdir(os.path.join(work, "all"))) == ["labels.npy", "labels.nrrd", "segmentation.png",
-                                                         "segments.json"]  # a grid: no map.nrrd, no cloud
+assert sorted(os.listdir(os.path.join(work, "all"))) == ["labels.npy", "labels.nrrd", "scene.png", "segmentation.png",
+                                                         "segments.json", "segments.ot", "segments.ply"]  # a grid: no map.nrrd, no cloud
 labels = np.load(os.path.join(work, "all", "labels.npy"))
 assert np.frombuffer(samples, "<u4").reshape(labels.shape).tolist() == labels.tolist()
 
 r = run("segment", "map.npy", "--out", "two", "--outputs", "labels.npy, segments.json")
 assert r.returncode == 0 and sorted(os.listdir(os.path.join(work, "two"))) == ["labels.npy", "segments.json"], r.stderr
 r = run("segment", "map.npy", "--out", "plus", "--outputs", "default,labels.npy")
-assert r.returncode == 0 and len(os.listdir(os.path.join(work, "plus"))) == 4, r.stderr
+assert r.returncode == 0 and len(os.listdir(os.path.join(work, "plus"))) == 5, r.stderr
 
 for bad, what in (("labels.vtk", "'labels.vtk'"), ("labels.npy,,segments.json", "an empty name"), ("ALL", "'ALL'")):
     r = run("segment", "map.npy", "--out", "bad_list", "--outputs", bad)
@@ -114,9 +114,9 @@ os.makedirs(os.path.join(reuse, "map.nrrd"))  # a directory under an output's na
 shutil.copy(os.path.join(work, "map.npy"), os.path.join(reuse, "segments.pcd"))  # a stand-in for an old cloud
 r = run("segment", "map.npy", "--out", "reuse")
 assert r.returncode == 0, r.stderr
-assert sorted(os.listdir(reuse)) == ["labels.nrrd", "map.nrrd", "notes.txt", "segmentation.png", "segments.json"], \
+assert sorted(os.listdir(reuse)) == ["labels.nrrd", "map.nrrd", "notes.txt", "scene.png", "segmentation.png", "segments.json"], \
     os.listdir(reuse)
-assert "removed (an earlier run's, not written now): reuse/labels.npy reuse/segments.pcd" in r.stdout, r.stdout
+assert "removed (an earlier run's, not written now): reuse/labels.npy reuse/segments.pcd reuse/segments.ot reuse/segments.ply" in r.stdout, r.stdout
 assert open(os.path.join(reuse, "notes.txt")).read() == "mine"
 r = run("segment", "map.npy", "--out", "reuse", "--json")
 assert json.loads(r.stdout)["removed"] == [], r.stdout

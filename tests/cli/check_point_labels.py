@@ -56,7 +56,7 @@ def nrrd_frame(path):
 
 # The table scene: an organized 640 x 480 cloud, VIEWPOINT 0 0 0 0 1 0 0 (x, -y, -z).
 out = os.path.join(work, "table")
-run("segment", TABLE, "--voxel-size", "0.02", "--out", out, "--quiet")
+run("segment", TABLE, "--voxel-size", "0.02", "--out", out, "--outputs", "default,points.pcd,segments.pcd,map.nrrd", "--quiet")
 labels = np.load(os.path.join(out, "points.labels.npy"))
 assert labels.dtype == np.uint32 and labels.shape == (480, 640), (labels.dtype, labels.shape)
 doc = json.load(open(os.path.join(out, "segments.json")))
@@ -107,7 +107,8 @@ with open(small, "w") as f:
     f.write("VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 5\nHEIGHT 1\n"
             "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 5\nDATA ascii\n" + "\n".join(pts) + "\n")
 sout = os.path.join(work, "small")
-run("segment", small, "--voxel-size", "0.1", "--bbox", "0", "0", "0", "0.5", "0.5", "0.5", "--out", sout, "--quiet")
+run("segment", small, "--voxel-size", "0.1", "--bbox", "0", "0", "0", "0.5", "0.5", "0.5", "--out", sout,
+    "--outputs", "default,points.pcd", "--quiet")
 sl = np.load(os.path.join(sout, "points.labels.npy"))
 assert sl.shape == (5,) and sl.dtype == np.uint32, (sl.shape, sl.dtype)
 assert sl[2] == NO_LABEL and sl[3] == NO_LABEL, sl

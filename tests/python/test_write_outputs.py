@@ -15,9 +15,14 @@ def test_default_set_matches_the_command_with_the_frame(cli, tmp_path, scene):
     cli("segment", tmp_path / "map.npy", "--out", tmp_path / "cli", "--voxel-size", "0.05")
     with occseg.segment(scene, voxel_size=0.05) as r:
         r.write(tmp_path / "py")
-    for name in ("labels.npy", "labels.nrrd", "segments.json"):
+    for name in ("labels.nrrd", "segments.json"):
         assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
-    assert sorted(os.listdir(tmp_path / "py")) == ["labels.npy", "labels.nrrd", "segments.json"]
+    assert sorted(os.listdir(tmp_path / "py")) == ["labels.nrrd", "segments.json"]
+    r2 = occseg.segment(scene, voxel_size=0.05)
+    with r2:
+        r2.write(tmp_path / "py_npy", outputs=["labels.npy"])
+    cli("segment", tmp_path / "map.npy", "--out", tmp_path / "cli_npy", "--voxel-size", "0.05", "--outputs", "labels.npy")
+    assert (tmp_path / "py_npy" / "labels.npy").read_bytes() == (tmp_path / "cli_npy" / "labels.npy").read_bytes()
 
 
 def test_all_adds_the_mesh_and_names_are_checked(tmp_path):
