@@ -96,7 +96,7 @@ print(f"table: {finite.sum()} points, {in_pcd.mean():.4%} in occupied segments, 
 
 # points.pcd is a cloud occseg reads again: the same map and the same labels.
 again = os.path.join(work, "again")
-run("segment", os.path.join(out, "points.pcd"), "--voxel-size", "0.02", "--out", again, "--quiet")
+run("segment", os.path.join(out, "points.pcd"), "--voxel-size", "0.02", "--out", again, "--outputs", "default,map.nrrd", "--quiet")
 assert open(os.path.join(again, "map.nrrd"), "rb").read() == open(os.path.join(out, "map.nrrd"), "rb").read()
 assert np.array_equal(np.load(os.path.join(again, "points.labels.npy")), labels)
 
