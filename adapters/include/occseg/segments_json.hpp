@@ -1,6 +1,9 @@
 // segments.json, the segment table that `occseg segment`, `occseg demo` and occseg_result_write
-// write: {"dims": [nx, ny, nz], "preset": ..., "segments": [{"id", "state", "voxels", "mop",
-// "bbox": {"min", "max"}, "centroid"}, ...]}, one segment a line.
+// write: {"dims": [nx, ny, nz], "voxel_size", "origin": [x, y, z], "preset": ..., "segments":
+// [{"id", "state", "kind", "voxels", "mop", "bbox": {"min", "max"}, "centroid", "box_m": {"min",
+// "max"}, "size_m", "centroid_m"}, ...]}, one segment a line; bbox and centroid in voxel indices,
+// the *_m fields in metres in the map's frame (origin + voxel_size x index; the box from the min
+// corner to the max corner of its voxels, the centroid as the mean voxel centre).
 #pragma once
 #include <ostream>
 #include <string>
