@@ -15,10 +15,10 @@ from ._errors import OccsegError, OccsegTypeError, OccsegValueError, Status
 from ._handles import live_handles
 from ._map import Map, read_map
 from ._params import ParamInfo, param_table
-from ._result import Result, Segment, State
+from ._result import Kind, Result, Segment, State
 from ._segment import segment
 
-__all__ = ["segment", "read_map", "Map", "Result", "Context", "Segment", "State", "Status", "OccsegError",
+__all__ = ["segment", "read_map", "Map", "Result", "Context", "Segment", "State", "Kind", "Status", "OccsegError",
            "OccsegTypeError", "OccsegValueError", "ParamInfo",
            "param_table", "version", "version_number", "library_path", "live_handles"]
 

@@ -31,5 +31,6 @@ int run_strides_tests(void);
 int run_segment_tests(void);
 int run_result_tests(void);
 int run_context_tests(void);
+int run_kinds_tests(void);
 
 #endif

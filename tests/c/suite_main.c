@@ -47,6 +47,7 @@ int main(void) {
   failed += run_segment_tests();
   failed += run_result_tests();
   failed += run_context_tests();
+  failed += run_kinds_tests();
   printf("occseg C suite: %d failed\n", failed);
   return failed == 0 ? 0 : 1;
 }

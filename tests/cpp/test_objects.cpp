@@ -37,7 +37,7 @@ struct Scene {
   void group(const Params& p) {
     label_components(states, grid, labels, segments, 1, true);
     group_objects(grid, labels, segments, p);
-    assign_kinds(segments, p);
+    assign_kinds(segments, p, grid.dims);
   }
   std::uint32_t at(int x, int y, int z) const { return labels[grid.index(x, y, z)]; }
   std::size_t count(State s) const {
@@ -245,7 +245,7 @@ TEST(Objects, KindsFollowStatesAndSupportPlanes) {
   });
   s.group(rules(3, 27, 64));
   split_support_planes(s.grid, s.labels, s.segments, 256, true);
-  assign_kinds(s.segments, rules(3, 27, 64));
+  assign_kinds(s.segments, rules(3, 27, 64), s.grid.dims);
   EXPECT_EQ(s.segments[s.at(0, 0, 2)].kind, Kind::structure);
   EXPECT_EQ(s.segments[s.at(11, 11, 5)].kind, Kind::object);
   EXPECT_EQ(s.segments[s.at(0, 0, 0)].kind, Kind::unknown);
@@ -352,4 +352,21 @@ TEST(Objects, NoiseFreeMapsStayVoxelExact) {
   EXPECT_NE(r.labels[g.index(5, 5, 5)], r.labels[g.index(18, 5, 5)]);
   EXPECT_EQ(r.segments[r.labels[g.index(5, 5, 5)]].kind, Kind::object);
   EXPECT_EQ(r.segments[r.labels[g.index(34, 24, 12)]].kind, Kind::object);
+}
+
+TEST(Objects, MinimumSizesAreAreasOnOneLayerMaps) {
+  EXPECT_EQ(minimum_size(27, Dims{10, 10, 2}), 27u);
+  EXPECT_EQ(minimum_size(27, Dims{10, 10, 1}), 9u);
+  EXPECT_EQ(minimum_size(64, Dims{10, 10, 1}), 16u);
+  EXPECT_EQ(minimum_size(1, Dims{10, 10, 1}), 1u);
+  EXPECT_EQ(minimum_size(0, Dims{10, 10, 1}), 0u);
+  // A 2D room: a 24-cell box 3 free cells from the wall stays an object of its own.
+  Scene s({40, 30, 1}, [](int x, int y, int) {
+    if (y == 27 && x >= 3 && x <= 36) return O;
+    if (x >= 10 && x < 16 && y >= 20 && y < 24) return O;
+    return F;
+  });
+  s.group(rules(3, 27, 64));
+  EXPECT_EQ(s.count(State::occupied), 2u);
+  EXPECT_EQ(s.segments[s.at(10, 20, 0)].kind, Kind::object);
 }

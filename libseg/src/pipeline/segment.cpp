@@ -237,7 +237,7 @@ Result segment_into(const Grid& grid, const Params& requested, bool keep_stages,
       split_support_planes(grid, r.labels, r.segments, static_cast<std::size_t>(params.support_plane),
                            params.occupied_connectivity == 26, params.threads, k);
   }
-  assign_kinds(r.segments, params);
+  assign_kinds(r.segments, params, grid.dims);
   st.end();
   return r;
 }

@@ -3,6 +3,7 @@
 #include "rules/objects.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <limits>
 #include <memory>
@@ -41,6 +42,16 @@ struct Groups {
     return true;
   }
 };
+
+}  // namespace
+
+std::uint64_t minimum_size(int voxels, const Dims& d) {
+  if (voxels <= 0) return 0;
+  if (d.nz > 1) return static_cast<std::uint64_t>(voxels);
+  return std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::lround(std::pow(double(voxels), 2.0 / 3.0))));
+}
+
+namespace {
 
 std::size_t box_volume(const Segment& s) {
   std::size_t v = 1;
@@ -175,7 +186,7 @@ class Grouper {
   // Rule 7. The joins are decided for all small groups first and made afterwards, so a small
   // group never joins through another small one and the order of the groups changes nothing.
   void speckles() {
-    const std::uint64_t min = static_cast<std::uint64_t>(p_.min_object_voxels);
+    const std::uint64_t min = minimum_size(p_.min_object_voxels, d_);
     const std::vector<std::uint64_t> size = group_sizes();
     std::vector<char> want(segs_.size(), 0);
     bool any = false;
@@ -217,7 +228,7 @@ class Grouper {
 
   // Rule 8.
   void pockets() {
-    const std::uint64_t min = static_cast<std::uint64_t>(p_.min_pocket_voxels);
+    const std::uint64_t min = minimum_size(p_.min_pocket_voxels, d_);
     // The main free space: the largest free segment (the first of equals).
     std::size_t main = segs_.size();
     for (std::size_t s = 0; s < segs_.size(); ++s)
@@ -373,8 +384,8 @@ void group_objects(const Grid& grid, LabelArray& labels, std::vector<Segment>& s
   Grouper(grid, labels, segments, params).run();
 }
 
-void assign_kinds(std::vector<Segment>& segments, const Params& params) {
-  const std::uint64_t min = params.min_object_voxels > 0 ? static_cast<std::uint64_t>(params.min_object_voxels) : 0;
+void assign_kinds(std::vector<Segment>& segments, const Params& params, const Dims& dims) {
+  const std::uint64_t min = minimum_size(params.min_object_voxels, dims);
   for (Segment& s : segments) {
     if (s.state == State::free) s.kind = Kind::free;
     else if (s.state == State::unknown) s.kind = Kind::unknown;

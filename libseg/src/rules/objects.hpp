@@ -15,6 +15,7 @@ namespace occseg {
 // segment's first voxel):
 //  - proximity (params.object_gap > 0): occupied segments joined by a 6-connected path of at most
 //    object_gap voxels that are all unknown become one segment (transitively);
+// (Minimum sizes as minimum_size() gives them for the map.)
 //  - speckles (params.min_object_voxels > 0): an occupied group (after proximity) of fewer voxels
 //    joins the group of at least that many voxels nearest to it (squared distance between voxel
 //    centres; ties: the group of the smaller id) whose voxel lies within object_gap + 1 voxels on
@@ -31,6 +32,11 @@ void group_objects(const Grid& grid, LabelArray& labels, std::vector<Segment>& s
 // Each segment's kind from its state: free, unknown, and for occupied segments structure (when
 // the support-plane rule marked it so), clutter (fewer than params.min_object_voxels voxels) or
 // object.
-void assign_kinds(std::vector<Segment>& segments, const Params& params);
+void assign_kinds(std::vector<Segment>& segments, const Params& params, const Dims& dims);
+
+// A minimum size parameter (min_object_voxels, min_pocket_voxels) on a map of `dims`: the value
+// itself, but on a one-layer map (nz = 1) the area of a square whose side is its cube's edge,
+// round(v^(2/3)) cells (27 -> 9, 64 -> 16): a 2D map's regions are areas, not volumes. 0: off.
+std::uint64_t minimum_size(int voxels, const Dims& dims);
 
 }  // namespace occseg
