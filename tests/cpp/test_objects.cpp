@@ -6,6 +6,8 @@
 #include <functional>
 #include <set>
 
+#include "occseg/error.hpp"
+
 #include "occseg/segment.hpp"
 #include "rules/objects.hpp"
 #include "rules/planes.hpp"
@@ -369,4 +371,35 @@ TEST(Objects, MinimumSizesAreAreasOnOneLayerMaps) {
   s.group(rules(3, 27, 64));
   EXPECT_EQ(s.count(State::occupied), 2u);
   EXPECT_EQ(s.segments[s.at(10, 20, 0)].kind, Kind::object);
+}
+
+TEST(Objects, ParametersAreSetByNameAndChecked) {
+  Params p;
+  EXPECT_EQ(get_param(p, "object_gap"), "4");
+  EXPECT_EQ(get_param(p, "min_object_voxels"), "64");
+  EXPECT_EQ(get_param(p, "min_pocket_voxels"), "64");
+  set_param(p, "object_gap", "2");
+  set_param(p, "min_object_voxels", "10");
+  set_param(p, "min_pocket_voxels", "0");
+  EXPECT_EQ(p.object_gap, 2);
+  EXPECT_EQ(p.min_object_voxels, 10);
+  EXPECT_EQ(p.min_pocket_voxels, 0);
+  const auto message = [&](const char* name, const char* value) {
+    try {
+      set_param(p, name, value);
+    } catch (const Error& e) {
+      EXPECT_EQ(e.status(), Status::invalid_argument);
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message("object_gap", "17").find("parameter 'object_gap': 17 is outside [0, 16]"), std::string::npos);
+  EXPECT_NE(message("min_object_voxels", "-1").find("'min_object_voxels'"), std::string::npos);
+  EXPECT_NE(message("min_pocket_voxels", "2.5").find("not an integer"), std::string::npos);
+  EXPECT_NE(message("min_pocket_voxels", "nan").find("not a number"), std::string::npos);
+  Params q;
+  q.object_gap = 99;
+  EXPECT_THROW(q.validate(), Error);
+  set_param(p, "preset", "paper");
+  EXPECT_EQ(get_param(p, "object_gap"), "0");
 }

@@ -43,8 +43,8 @@ struct Params {
   // join an object within object_gap + 1 voxels or are clutter; free regions of fewer than
   // min_pocket_voxels (not the main free space) become unknown, and unknown ones that small next
   // to an object join it.
-  int object_gap = 3;
-  int min_object_voxels = 27;
+  int object_gap = 4;
+  int min_object_voxels = 64;
   int min_pocket_voxels = 64;
   int threads = 0;             // 0: all cores. Results never depend on it.
   // Texture operator, by name (occseg/registry.hpp). "auto" (both presets): lbp8, the authors'
