@@ -75,23 +75,30 @@ class Grouper {
   }
 
  private:
-  // The voxels of the segments flagged in `want` (by id), in scan order within each segment's
-  // box, segment after segment in id order; one pass over the labels instead when the boxes add
-  // up to more than half the map.
-  std::vector<std::uint32_t> members(const std::vector<char>& want) const {
-    std::size_t boxes = 0, count = 0;
+  // Calls fn(i) for the voxels of the segments flagged in `want` (by id), in scan order within
+  // each segment's box, segment after segment in id order; in one pass over the labels instead
+  // when the boxes add up to more than half the map. Nothing is listed: on a noisy map the
+  // occupied voxels are a third of the map.
+  template <typename Fn>
+  void for_members(const std::vector<char>& want, Fn&& fn) const {
+    std::size_t boxes = 0;
     for (std::size_t s = 0; s < segs_.size(); ++s)
-      if (want[s]) boxes += box_volume(segs_[s]), count += segs_[s].voxels;
-    std::vector<std::uint32_t> out;
-    out.reserve(count);
+      if (want[s]) boxes += box_volume(segs_[s]);
     if (2 * boxes > labels_.size()) {
       for (std::size_t i = 0; i < labels_.size(); ++i)
-        if (want[labels_[i]]) out.push_back(static_cast<std::uint32_t>(i));
-      return out;
+        if (want[labels_[i]]) fn(i);
+      return;
     }
-    for (std::size_t s = 0; s < segs_.size(); ++s)
-      if (want[s]) box_members(static_cast<std::uint32_t>(s), out);
-    return out;
+    for (std::size_t s = 0; s < segs_.size(); ++s) {
+      if (!want[s]) continue;
+      const Segment& seg = segs_[s];
+      for (std::size_t z = seg.bbox_min[2]; z <= seg.bbox_max[2]; ++z)
+        for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1]; ++y) {
+          const std::size_t row = nx * (y + ny * z);
+          for (std::size_t x = seg.bbox_min[0]; x <= seg.bbox_max[0]; ++x)
+            if (labels_[row + x] == s) fn(row + x);
+        }
+    }
   }
 
   void box_members(std::uint32_t s, std::vector<std::uint32_t>& out) const {
@@ -135,7 +142,6 @@ class Grouper {
       if (state_[s] == kOccupied) want[s] = 1, ++occupied;
     if (occupied < 2) return;
     const int gap = p_.object_gap;
-    const std::vector<std::uint32_t> occ = members(want);
     // d per voxel, 0: not reached. Zeroed pages come from the system as the search touches them.
     std::unique_ptr<std::uint8_t, void (*)(void*)> dist(static_cast<std::uint8_t*>(std::calloc(labels_.size(), 1)),
                                                         std::free);
@@ -149,7 +155,10 @@ class Grouper {
       labels_[j] = from;
       next.push_back(static_cast<std::uint32_t>(j));
     };
-    for (const std::uint32_t i : occ) {
+    // (Reached voxels hold an occupied segment's id meanwhile, so the scan over the labels below
+    // must not take them for occupied voxels: d says which they are.)
+    for_members(want, [&](std::size_t i) {
+      if (d[i]) return;
       const std::uint32_t a = labels_[i];
       for_faces(i, [&](std::size_t j) {
         if (d[j]) {
@@ -158,7 +167,7 @@ class Grouper {
           reach(j, 1, a);
         }
       });
-    }
+    });
     for (int depth = 1; depth < gap; ++depth) {
       layer.swap(next);
       next.clear();
