@@ -88,6 +88,22 @@ int main(int argc, char** argv) {
       Params p;
       set_param(p, "preset", argv[3]);
       set_param(p, "threads", argv[4]);
+      // OCCSEG_BENCH_PARAMS="name=value,name=value": further parameters (e.g. the object rules off,
+      // to time them side by side in one run).
+      if (const char* extra = std::getenv("OCCSEG_BENCH_PARAMS"); extra && *extra) {
+        std::string list = extra;
+        for (std::size_t at = 0; at <= list.size();) {
+          const std::size_t end = std::min(list.find(',', at), list.size());
+          const std::string item = list.substr(at, end - at);
+          const std::size_t eq = item.find('=');
+          if (eq == std::string::npos) {
+            std::fprintf(stderr, "occseg_bench_segment: OCCSEG_BENCH_PARAMS item '%s' is not name=value\n", item.c_str());
+            return 2;
+          }
+          set_param(p, item.substr(0, eq), item.substr(eq + 1));
+          at = end + 1;
+        }
+      }
       const int repeats = std::max(1, std::atoi(argv[5]));
       std::unique_ptr<Context> ctx;
       if (argc == 7) ctx = std::make_unique<Context>(p.threads);

@@ -1,4 +1,5 @@
 // occseg_segment and the occseg_result_* accessors.
+#include <cstddef>
 #include <algorithm>
 #include <cstring>
 #include <memory>
@@ -31,6 +32,9 @@ void fill_info(const occseg::Segment& s, occseg_segment_info& info) {
     info.bbox_max[k] = s.bbox_max[k];
     info.centroid[k] = s.centroid[k];
   }
+  // Appended after version 1 (OCCSEG_SEGMENT_INFO_SIZE_V1): filled only for callers whose struct has it.
+  if (info.struct_size >= offsetof(occseg_segment_info, kind) + sizeof info.kind)
+    info.kind = static_cast<occseg_kind>(s.kind);
 }
 
 // The body of occseg_segment and occseg_context_segment (context: NULL for none).
@@ -93,15 +97,26 @@ uint32_t occseg_result_segment_count(const occseg_result* result) {
   return n;
 }
 
+// The old layout is this one cut before `kind`; the kinds' values are the library's.
+static_assert(OCCSEG_SEGMENT_INFO_SIZE_V1 == offsetof(occseg_segment_info, kind),
+              "occseg_segment_info: fields before 'kind' moved");
+static_assert(OCCSEG_KIND_FREE == static_cast<int>(occseg::Kind::free) &&
+              OCCSEG_KIND_UNKNOWN == static_cast<int>(occseg::Kind::unknown) &&
+              OCCSEG_KIND_STRUCTURE == static_cast<int>(occseg::Kind::structure) &&
+              OCCSEG_KIND_OBJECT == static_cast<int>(occseg::Kind::object) &&
+              OCCSEG_KIND_CLUTTER == static_cast<int>(occseg::Kind::clutter));
+
 int occseg_result_segment(const occseg_result* result, uint32_t index, occseg_segment_info* out) {
   return guard("occseg_result_segment", [&] {
     require(result, "result");
     require(out, "out");
-    // Only one layout exists so far; later versions will also accept this size.
-    if (out->struct_size != sizeof(occseg_segment_info))
+    // Two layouts: this header's, and the one before `kind` was appended (old callers).
+    if (out->struct_size != sizeof(occseg_segment_info) && out->struct_size != OCCSEG_SEGMENT_INFO_SIZE_V1)
       throw Error(Status::invalid_argument, "out->struct_size " + std::to_string(out->struct_size) +
                                                 " is not sizeof(occseg_segment_info) = " +
-                                                std::to_string(sizeof(occseg_segment_info)));
+                                                std::to_string(sizeof(occseg_segment_info)) +
+                                                " nor the size before 'kind', " +
+                                                std::to_string(OCCSEG_SEGMENT_INFO_SIZE_V1));
     const auto& segs = result->result.segments;
     if (index >= segs.size())
       throw Error(Status::out_of_range, "index " + std::to_string(index) + " is out of range (the result has " +

@@ -15,10 +15,10 @@ from ._errors import OccsegError, OccsegTypeError, OccsegValueError, Status
 from ._handles import live_handles
 from ._map import Map, read_map
 from ._params import ParamInfo, param_table
-from ._result import Box, Result, Segment, State, segment_colour
+from ._result import Box, Kind, Result, Segment, State, segment_colour
 from ._segment import segment
 
-__all__ = ["segment", "read_map", "Map", "Result", "Context", "Segment", "State", "Status", "OccsegError", "Box",
+__all__ = ["segment", "read_map", "Map", "Result", "Context", "Segment", "State", "Kind", "Status", "OccsegError", "Box",
            "segment_colour",
            "OccsegTypeError", "OccsegValueError", "ParamInfo",
            "param_table", "version", "version_number", "library_path", "live_handles"]

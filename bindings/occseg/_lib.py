@@ -32,6 +32,7 @@ class SegmentInfo(ctypes.Structure):
         ("bbox_min", c_uint3),
         ("bbox_max", c_uint3),
         ("centroid", c_double3),
+        ("kind", ctypes.c_int),  # occseg_kind, appended after centroid
     ]
 
 

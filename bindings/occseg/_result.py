@@ -52,6 +52,16 @@ class State(enum.IntEnum):
     OCCUPIED = 2
 
 
+class Kind(enum.IntEnum):
+    """occseg_kind: what a segment is in the scene (docs/algorithm.md, default preset rule 9)."""
+
+    FREE = 0
+    UNKNOWN = 1
+    STRUCTURE = 2  # occupied, lying mostly on a support plane (floor, wall, table top)
+    OBJECT = 3
+    CLUTTER = 4  # occupied, fewer than min_object_voxels voxels
+
+
 @dataclasses.dataclass(frozen=True)
 class Segment:
     """One segment: a 6-connected region of voxels of one state. Index triples are (x, y, z),
@@ -63,6 +73,7 @@ class Segment:
     mop: float  # mean occupancy probability of its voxels
     bbox: tuple  # ((xmin, ymin, zmin), (xmax, ymax, zmax)), voxel indices, both inclusive
     centroid: tuple  # mean voxel index (x, y, z)
+    kind: Kind = Kind.OBJECT  # free, unknown, structure, object or clutter
 
     @property
     def slices(self):
@@ -242,7 +253,7 @@ class Result(Owned):
         info = SegmentInfo(struct_size=ctypes.sizeof(SegmentInfo))
         check(lib.occseg_result_segment(h, index, ctypes.byref(info)))
         return Segment(info.id, State(info.state), info.voxels, info.mop,
-                       (tuple(info.bbox_min), tuple(info.bbox_max)), tuple(info.centroid))
+                       (tuple(info.bbox_min), tuple(info.bbox_max)), tuple(info.centroid), Kind(info.kind))
 
     def states(self):
         """The state (State value) of each voxel, uint8, the shape of labels: a read-only array

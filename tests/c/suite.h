@@ -34,5 +34,6 @@ int run_context_tests(void);
 int run_reader_options_tests(void);
 int run_boxes_tests(void);
 int run_borrow_tests(void);
+int run_kinds_tests(void);
 
 #endif

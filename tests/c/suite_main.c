@@ -50,6 +50,7 @@ int main(void) {
   failed += run_reader_options_tests();
   failed += run_boxes_tests();
   failed += run_borrow_tests();
+  failed += run_kinds_tests();
   printf("occseg C suite: %d failed\n", failed);
   return failed == 0 ? 0 : 1;
 }

@@ -28,7 +28,9 @@ static void segment_info_errors(void **state) {
   EXPECT_FAIL(occseg_result_segment(NULL, 0, &s), OCCSEG_EINVAL, "'result'");
   s.struct_size = 0;
   EXPECT_FAIL(occseg_result_segment(r, 0, &s), OCCSEG_EINVAL, "out->struct_size 0 is not sizeof(occseg_segment_info)");
-  s.struct_size = sizeof s - 8;
+  s.struct_size = sizeof s - 4;
+  EXPECT_FAIL(occseg_result_segment(r, 0, &s), OCCSEG_EINVAL, "struct_size");
+  s.struct_size = OCCSEG_SEGMENT_INFO_SIZE_V1 - 8;
   EXPECT_FAIL(occseg_result_segment(r, 0, &s), OCCSEG_EINVAL, "struct_size");
   s.struct_size = sizeof s + 8;
   EXPECT_FAIL(occseg_result_segment(r, 0, &s), OCCSEG_EINVAL, "struct_size");
@@ -130,8 +132,8 @@ static void write_files(void **state) {
   assert_non_null(json);
   assert_non_null(strstr(json, "\"dims\": [56, 48, 40]"));
   assert_non_null(strstr(json, "\"preset\": \"default\""));
-  assert_non_null(strstr(json, "{\"id\": 1, \"state\": \"occupied\", \"voxels\": 1000,"));
-  assert_non_null(strstr(json, "\"bbox\": {\"min\": [30, 25, 20], \"max\": [49, 39, 34]}, \"centroid\": [39.5, 32, 27], "));
+  assert_non_null(strstr(json, "{\"id\": 1, \"state\": \"occupied\", \"kind\": \"object\", \"voxels\": 1000,"));
+  assert_non_null(strstr(json, "\"bbox\": {\"min\": [30, 25, 20], \"max\": [49, 39, 34]}, \"centroid\": [39.5, 32, 27], \"box_m\": {\"min\": [3, 2.5, 2], \"max\": [5, 4, 3.5]}"));
   /* The map's frame and the segment's oriented box, in metres (voxels of 0.1 m). */
   assert_non_null(strstr(json, "\"voxel_size\": 0.1,\n \"origin\": [0, 0, 0]"));
   assert_non_null(strstr(json, "\"obb\": {\"center\": [4, 3.25, 2.75], \"extents\": [2, 1.5, 1.5], \"quaternion\": [1, 0, 0, 0]}}"));

@@ -40,8 +40,8 @@ out = r.stdout
 assert "map.npy: NumPy .npy, float32, C order, 56 x 48 x 40 voxels of 0.5 m, origin (0.0, 0.0, 0.0) m" in out, out
 n_free = states.count("free")
 assert f"preset default: {len(states)} segments: {n_free} free, 1 unknown, 2 occupied" in out, out
-rows = [l.split() for l in out.splitlines() if re.match(r"^\s+\d+\s+\d+\s+0\.970\s", l)]
-assert [row[1] for row in rows] == ["4500", "1000"], rows  # largest first
+rows = [l.split() for l in out.splitlines() if re.match(r"^\s+\d+\s+object\s+\d+\s+0\.970\s", l)]
+assert [row[2] for row in rows] == ["4500", "1000"], rows  # objects first, largest first
 assert re.search(r"\(15\.0, 12\.5, 10\.0\)\s+\(25\.0, 20\.0, 17\.5\)\s+10\.0 x 7\.5 x 7\.5$", out, re.M), out
 assert re.search(r"\(2\.5, 2\.5, 2\.5\)\s+\(7\.5, 7\.5, 7\.5\)\s+5\.0 x 5\.0 x 5\.0$", out, re.M), out
 assert re.search(r"^time: read [\d.]+ s, texture [\d.]+ s, division [\d.]+ s, creation [\d.]+ s, "

@@ -33,7 +33,13 @@ struct Segmented {
         for (std::size_t x = 0; x < n; ++x) p[x + n * (y + n * z)] = ((x / 2 + y / 2 + z / 2) % 2) ? 0.95f : 0.05f;
     const std::size_t d[3] = {n, n, n};
     EXPECT_EQ(occseg_map_from_buffer(&map, p.data(), OCCSEG_F32, d, nullptr, 1.0), OCCSEG_OK);
-    EXPECT_EQ(occseg_segment(&result, map, nullptr), OCCSEG_OK) << occseg_last_error();
+    // The object rules off: they would make the checkerboard's small cells one object.
+    occseg_params* params = nullptr;
+    EXPECT_EQ(occseg_params_create(&params), OCCSEG_OK);
+    for (const char* name : {"object_gap", "min_object_voxels", "min_pocket_voxels"})
+      EXPECT_EQ(occseg_params_set(params, name, "0"), OCCSEG_OK);
+    EXPECT_EQ(occseg_segment(&result, map, params), OCCSEG_OK) << occseg_last_error();
+    occseg_params_free(params);
   }
   ~Segmented() {
     occseg_result_free(result);
@@ -139,8 +145,9 @@ TEST(Output, TheCommandLeavesNothingWhenTheDiskFillsOrTheDirectoryIsUnwritable) 
       const int null = ::open("/dev/null", O_WRONLY);
       ::dup2(null, 1);
       ::dup2(null, 2);
-      ::execl(OCCSEG_CLI, OCCSEG_CLI, "segment", in.c_str(), "--out", out.c_str(), "--outputs", "all",
-              static_cast<char*>(nullptr));
+      ::execl(OCCSEG_CLI, OCCSEG_CLI, "segment", in.c_str(), "--out", out.c_str(), "--outputs", "all", "--param",
+              "object_gap=0", "--param", "min_object_voxels=0", "--param", "min_pocket_voxels=0",
+              static_cast<char*>(nullptr));  // as Segmented
       return 97;
     });
   };
@@ -203,8 +210,9 @@ int run_cli_sigxfsz_default(const std::string& in, const std::string& out, rlim_
     const int e = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     ::dup2(null, 1);
     ::dup2(e, 2);
-    ::execl(OCCSEG_CLI, OCCSEG_CLI, "segment", in.c_str(), "--out", out.c_str(), "--outputs", "all",
-              static_cast<char*>(nullptr));
+      ::execl(OCCSEG_CLI, OCCSEG_CLI, "segment", in.c_str(), "--out", out.c_str(), "--outputs", "all", "--param",
+              "object_gap=0", "--param", "min_object_voxels=0", "--param", "min_pocket_voxels=0",
+              static_cast<char*>(nullptr));  // as Segmented
     return 97;
   });
 }

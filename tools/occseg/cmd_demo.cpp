@@ -69,7 +69,7 @@ void print_demo_summary(std::ostream& os, RunReport rep, const sim::Scene& scene
   os << "\nLook at " << d << "segmentation.png first. Everything is in " << d << ":\n"
      << "  segmentation.png   slices through the map, the segments and the ideal state\n"
      << "  scene.png          the occupied segments in 3D, one colour per segment\n"
-     << "  segments.json      the segment table: state, voxels, mean probability, box, centroid\n"
+     << "  segments.json      the segment table: state, kind, voxels, mean probability, box, centroid\n"
      << "  labels.npy         segment id per voxel, uint32 [z, y, x]; labels.nrrd for ParaView/3D Slicer\n"
      << "  map.npy            the simulated map, float32 [z, y, x]: try `occseg segment " << d
      << "map.npy --voxel-size " << voxel_size << " --out seg`\n"

@@ -59,15 +59,27 @@ MetricBox metric_box(const Grid& g, const Segment& s) {
   return b;
 }
 
+// Occupied segments for the summary: objects first, then structure, then clutter, each by size
+// (largest first; equal sizes by id).
 std::vector<const Segment*> largest_objects(const Result& r, std::size_t top) {
   std::vector<const Segment*> occ;
   for (const Segment& s : r.segments)
     if (s.state == State::occupied) occ.push_back(&s);
   const std::size_t n = std::min(top, occ.size());
+  const auto rank = [](Kind k) { return k == Kind::object ? 0 : k == Kind::structure ? 1 : 2; };
   std::partial_sort(occ.begin(), occ.begin() + static_cast<std::ptrdiff_t>(n), occ.end(),
-                    [](const Segment* a, const Segment* b) { return a->voxels != b->voxels ? a->voxels > b->voxels : a->id < b->id; });
+                    [&](const Segment* a, const Segment* b) {
+                      if (rank(a->kind) != rank(b->kind)) return rank(a->kind) < rank(b->kind);
+                      return a->voxels != b->voxels ? a->voxels > b->voxels : a->id < b->id;
+                    });
   occ.resize(n);
   return occ;
+}
+
+std::array<std::uint64_t, 5> segments_per_kind(const Result& r) {
+  std::array<std::uint64_t, 5> k{};
+  for (const Segment& s : r.segments) ++k[static_cast<int>(s.kind)];
+  return k;
 }
 
 std::array<std::uint64_t, 3> voxels_per_state(const Result& r) {
@@ -83,12 +95,14 @@ void print_summary(std::ostream& out, const RunReport& run) {
   const Dims& d = g.dims;
   std::array<std::uint64_t, 3> segs{};
   for (const Segment& s : r.segments) ++segs[static_cast<int>(s.state)];
+  const std::array<std::uint64_t, 5> kinds = segments_per_kind(r);
   const std::array<std::uint64_t, 3> vox = voxels_per_state(r);
   const double n = double(d.count());
   out << run.input << ": " << run.format << ", " << d.nx << " x " << d.ny << " x " << d.nz << " voxels of "
       << fixed(g.voxel_size, md) << " m, origin (" << triple(g.origin, md) << ") m\n";
   out << "preset " << run.preset << ": " << r.segments.size() << " segments: " << segs[0] << " free, " << segs[1]
-      << " unknown, " << segs[2] << " occupied\n";
+      << " unknown, " << segs[2] << " occupied (" << kinds[3] << " objects, " << kinds[2] << " structure, "
+      << kinds[4] << " clutter)\n";
   out << "voxels: " << fixed(100 * vox[0] / n, 2) << " % free, " << fixed(100 * vox[1] / n, 2) << " % unknown, "
       << fixed(100 * vox[2] / n, 2) << " % occupied\n";
   const std::vector<const Segment*> top = largest_objects(r, run.top);
@@ -97,22 +111,22 @@ void print_summary(std::ostream& out, const RunReport& run) {
   } else if (top.empty()) {
     out << "no occupied segment\n";
   } else {
-    out << "largest objects (occupied segments; boxes in metres, min to max corner):\n";
-    std::vector<std::array<std::string, 6>> rows{{"id", "voxels", "mop", "box min", "box max", "size"}};
+    out << "largest objects (occupied segments, objects first, by size; boxes in metres, min to max corner):\n";
+    std::vector<std::array<std::string, 7>> rows{{"id", "kind", "voxels", "mop", "box min", "box max", "size"}};
     for (const Segment* s : top) {
       const MetricBox b = metric_box(g, *s);
       const std::array<double, 3> size{b.max[0] - b.min[0], b.max[1] - b.min[1], b.max[2] - b.min[2]};
-      rows.push_back({std::to_string(s->id), std::to_string(s->voxels), fixed(s->mop, 3), "(" + triple(b.min, md) + ")",
-                      "(" + triple(b.max, md) + ")", triple(size, md, " x ")});
+      rows.push_back({std::to_string(s->id), kind_name(s->kind), std::to_string(s->voxels), fixed(s->mop, 3),
+                      "(" + triple(b.min, md) + ")", "(" + triple(b.max, md) + ")", triple(size, md, " x ")});
     }
-    std::array<std::size_t, 6> w{};
+    std::array<std::size_t, 7> w{};
     for (const auto& row : rows)
-      for (std::size_t c = 0; c < 6; ++c) w[c] = std::max(w[c], row[c].size());
+      for (std::size_t c = 0; c < 7; ++c) w[c] = std::max(w[c], row[c].size());
     for (const auto& row : rows) {
       out << "  ";
-      for (std::size_t c = 0; c < 6; ++c) {
-        if (c < 3) out << std::right << std::setw(int(w[c])) << row[c] << "  ";
-        else out << std::left << std::setw(c == 5 ? 0 : int(w[c])) << row[c] << (c == 5 ? "" : "  ");
+      for (std::size_t c = 0; c < 7; ++c) {
+        if (c != 1 && c < 4) out << std::right << std::setw(int(w[c])) << row[c] << "  ";
+        else out << std::left << std::setw(c == 6 ? 0 : int(w[c])) << row[c] << (c == 6 ? "" : "  ");
       }
       out << std::right << "\n";
     }
@@ -138,11 +152,13 @@ json summary_json(const RunReport& run) {
   const Result& r = *run.result;
   std::array<std::uint64_t, 3> segs{};
   for (const Segment& s : r.segments) ++segs[static_cast<int>(s.state)];
+  const std::array<std::uint64_t, 5> kinds = segments_per_kind(r);
   const std::array<std::uint64_t, 3> vox = voxels_per_state(r);
   json objects = json::array();
   for (const Segment* s : largest_objects(r, run.top)) {
     const MetricBox b = metric_box(g, *s);
     objects.push_back({{"id", s->id},
+                       {"kind", kind_name(s->kind)},
                        {"voxels", s->voxels},
                        {"mop", s->mop},
                        {"bbox_voxels", {{"min", s->bbox_min}, {"max", s->bbox_max}}},
@@ -159,6 +175,8 @@ json summary_json(const RunReport& run) {
           {"origin", g.origin},
           {"preset", run.preset},
           {"segments", {{"total", r.segments.size()}, {"free", segs[0]}, {"unknown", segs[1]}, {"occupied", segs[2]}}},
+          {"kinds", {{"free", kinds[0]}, {"unknown", kinds[1]}, {"structure", kinds[2]}, {"object", kinds[3]},
+                     {"clutter", kinds[4]}}},
           {"voxels", {{"free", vox[0]}, {"unknown", vox[1]}, {"occupied", vox[2]}}},
           {"largest_objects", objects},
           {"seconds", times},

@@ -36,8 +36,12 @@ struct MetricBox {
 };
 MetricBox metric_box(const Grid& grid, const Segment& s);
 
-// The `top` occupied segments with the most voxels, largest first (ties: lower id first).
+// The `top` occupied segments: objects first, then structure, then clutter, each largest first
+// (ties: lower id first).
 std::vector<const Segment*> largest_objects(const Result& r, std::size_t top);
+
+// Segment counts per kind (index = Kind).
+std::array<std::uint64_t, 5> segments_per_kind(const Result& r);
 
 // Voxel counts per state (index = State).
 std::array<std::uint64_t, 3> voxels_per_state(const Result& r);

@@ -1,9 +1,11 @@
 // segments.json, the segment table that `occseg segment`, `occseg demo` and occseg_result_write
-// write: {"dims": [nx, ny, nz], "preset": ..., "segments": [{"id", "state", "voxels", "mop",
-// "bbox": {"min", "max"}, "centroid"}, ...]}, one segment a line. With the map's frame (the
-// overload taking a SegmentsFrame) also "voxel_size" and "origin" (metres, the outer corner of
-// voxel (0, 0, 0)) after "preset", and per segment "obb": {"center", "extents", "quaternion"}
-// (metres; quaternion w, x, y, z; occseg/boxes.hpp) after "centroid".
+// write: {"dims": [nx, ny, nz], "voxel_size", "origin": [x, y, z], "preset": ..., "segments":
+// [{"id", "state", "kind", "voxels", "mop", "bbox": {"min", "max"}, "centroid", "box_m": {"min",
+// "max"}, "size_m", "centroid_m"}, ...]}, one segment a line; bbox and centroid in voxel indices,
+// the *_m fields in metres in the map's frame (origin + voxel_size x index; the box from the min
+// corner to the max corner of its voxels, the centroid as the mean voxel centre). With the
+// oriented boxes (the overload taking a SegmentsFrame) also per segment "obb": {"center",
+// "extents", "quaternion"} (metres; quaternion w, x, y, z; occseg/boxes.hpp) after "centroid_m".
 #pragma once
 #include <ostream>
 #include <string>

@@ -321,9 +321,27 @@ OCCSEG_API void occseg_context_recycle(occseg_context *context, occseg_result *r
 /*  Results                                                                                   */
 /* ========================================================================================== */
 
-/* One segment: a connected region of voxels of one state (6-connected; occupied voxels
- * 26-connected in the default preset, whose support-plane rule may also split an occupied region
- * into the plane and the objects standing on it; docs/algorithm.md). */
+/* What a segment is in the scene (docs/algorithm.md, default preset rule 9). The values are
+ * pinned: free and unknown follow the state; an occupied segment is structure (it lies mostly on
+ * a support plane: a floor, a wall, a table top), an object, or clutter (fewer than
+ * min_object_voxels voxels). The paper preset has only free, unknown and object. */
+typedef enum {
+  OCCSEG_KIND_FREE = 0,
+  OCCSEG_KIND_UNKNOWN = 1,
+  OCCSEG_KIND_STRUCTURE = 2,
+  OCCSEG_KIND_OBJECT = 3,
+  OCCSEG_KIND_CLUTTER = 4
+} occseg_kind;
+
+/* sizeof(occseg_segment_info) of the headers before `kind` was appended (occseg 0.x up to the
+ * version that added it): occseg_result_segment() still accepts it and fills only the fields up
+ * to `centroid`. */
+#define OCCSEG_SEGMENT_INFO_SIZE_V1 80u
+
+/* One segment: a region of voxels of one state (6-connected; in the default preset occupied
+ * voxels 26-connected and joined across gaps of unknown voxels, small regions joined to their
+ * neighbours, and an occupied region may be split into the support plane and the objects
+ * standing on it; docs/algorithm.md). New fields are only ever appended. */
 typedef struct {
   uint32_t struct_size;   /* set by the caller to sizeof(occseg_segment_info) */
   uint32_t id;            /* equals its index in the table and its label in the label array */
@@ -332,6 +350,7 @@ typedef struct {
   double mop;             /* mean occupancy probability of its voxels */
   uint32_t bbox_min[3], bbox_max[3];  /* voxel indices (x, y, z), both inclusive */
   double centroid[3];     /* mean voxel index (x, y, z) */
+  occseg_kind kind;       /* appended: filled when struct_size is sizeof(occseg_segment_info) */
 } occseg_segment_info;
 
 /* Frees a result. NULL is a no-op. */
@@ -344,8 +363,9 @@ OCCSEG_API int occseg_result_dims(const occseg_result *result, size_t dims[3]);
 OCCSEG_API uint32_t occseg_result_segment_count(const occseg_result *result);
 
 /* Fills `*out` with segment `index` (0 .. count - 1; OCCSEG_ERANGE beyond). out->struct_size
- * must be set to sizeof(occseg_segment_info) of a version of this header; any other value
- * fails with OCCSEG_EINVAL. */
+ * must be set to sizeof(occseg_segment_info) of a version of this header: this one's, or
+ * OCCSEG_SEGMENT_INFO_SIZE_V1 (a caller compiled before `kind`: the fields up to `centroid` are
+ * filled and nothing beyond them is written); any other value fails with OCCSEG_EINVAL. */
 OCCSEG_API int occseg_result_segment(const occseg_result *result, uint32_t index,
                                      occseg_segment_info *out);
 

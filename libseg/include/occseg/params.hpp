@@ -37,6 +37,15 @@ struct Params {
   // many voxels (a table top, a floor) splits into the plane and the objects standing on its
   // observed side (occseg/planes.hpp). 0: off (paper).
   int support_plane = 256;
+  // default preset only (rules/objects.hpp; 0: off, as in the paper preset): occupied segments
+  // joined by a 6-connected path of at most object_gap unknown voxels are one object (a surface
+  // scanned in rings with unknown between them); occupied groups of fewer than min_object_voxels
+  // join an object within object_gap + 1 voxels or are clutter; free regions of fewer than
+  // min_pocket_voxels (not the main free space) become unknown, and unknown ones that small next
+  // to an object join it.
+  int object_gap = 4;
+  int min_object_voxels = 64;
+  int min_pocket_voxels = 64;
   int threads = 0;             // 0: all cores. Results never depend on it.
   // Texture operator, by name (occseg/registry.hpp). "auto" (both presets): lbp8, the authors'
   // 2D operator, on a one-layer map (nz = 1), lbp6 on any other (resolved_texture).

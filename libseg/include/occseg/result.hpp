@@ -21,6 +21,13 @@ struct Block {
   }
 };
 
+// What a segment is in the scene (docs/algorithm.md, "Presets", rule 9): free and unknown follow
+// the state; an occupied segment is structure (it lies mostly on a support plane: a floor, a wall,
+// a table top), an object, or clutter (fewer than min_object_voxels voxels, nothing to act on).
+// The values are those of occseg_kind in the C ABI.
+enum class Kind : std::uint8_t { free = 0, unknown = 1, structure = 2, object = 3, clutter = 4 };
+const char* kind_name(Kind k);
+
 struct Segment {
   std::uint32_t id = 0;
   State state = State::unknown;
@@ -29,6 +36,7 @@ struct Segment {
   std::array<std::uint32_t, 3> bbox_min{0, 0, 0};  // voxel indices, inclusive
   std::array<std::uint32_t, 3> bbox_max{0, 0, 0};
   std::array<double, 3> centroid{0, 0, 0};         // mean voxel index (x, y, z)
+  Kind kind = Kind::unknown;                       // set by segment() (assign_kinds)
 };
 
 struct StageTime {
@@ -38,6 +46,8 @@ struct StageTime {
 
 struct Result {
   Dims dims;
+  double voxel_size = 1.0;                // the map's frame (Grid): metres per voxel edge, and
+  std::array<double, 3> origin{0, 0, 0};  // the world position of the corner of voxel (0, 0, 0)
   LabelArray labels;                  // segment id per voxel, x fastest (not zeroed on allocation)
   std::vector<Segment> segments;      // index = id
   std::vector<StageTime> timings;

@@ -8,6 +8,7 @@
 
 #include "occseg/error.hpp"
 #include "occseg/registry.hpp"
+#include "occseg/result.hpp"
 #include "registry/registry_internal.hpp"
 
 namespace occseg {
@@ -21,6 +22,17 @@ const char* state_name(State s) {
   return "?";
 }
 
+const char* kind_name(Kind k) {
+  switch (k) {
+    case Kind::free: return "free";
+    case Kind::unknown: return "unknown";
+    case Kind::structure: return "structure";
+    case Kind::object: return "object";
+    case Kind::clutter: return "clutter";
+  }
+  return "?";
+}
+
 const char* preset_name(Preset p) { return p == Preset::paper ? "paper" : "default"; }
 
 Params Params::paper() {
@@ -28,6 +40,9 @@ Params Params::paper() {
   p.preset = Preset::paper;
   p.occupied_connectivity = 6;
   p.support_plane = 0;
+  p.object_gap = 0;
+  p.min_object_voxels = 0;
+  p.min_pocket_voxels = 0;
   return p;
 }
 
@@ -47,6 +62,9 @@ const std::vector<ParamInfo>& param_table() {
       {"gap_radius", "int", 0, 16, "default preset: 0.5-voxels holding no (2r+1)^3 cube of 0.5 are gaps between rays"},
       {"occupied_connectivity", "int", 6, 26, "6 or 26: neighbours that join occupied voxels into one segment (default 26, paper 6)"},
       {"support_plane", "int", 0, 1e9, "default preset: voxels of a plane (>= half its segment) that splits objects standing on it off their support; 0 = off"},
+      {"object_gap", "int", 0, 16, "default preset: occupied segments joined by a path of at most this many unknown voxels are one object; 0 = off"},
+      {"min_object_voxels", "int", 0, 1e9, "default preset: occupied groups smaller than this join an object within object_gap + 1 voxels, else are clutter; 0 = off"},
+      {"min_pocket_voxels", "int", 0, 1e9, "default preset: free regions smaller than this (not the main free space) become unknown, unknown ones this small next to an object join it; 0 = off"},
       {"threads", "int", 0, 1024, "worker threads, 0 = all cores; results never depend on it"},
       {"texture", "string", 0, 0, "texture operator by name: auto (lbp8 when nz = 1, else lbp6), lbp6 (paper, 3D), lbp8 (3x3, 2D maps) or one a plugin adds"},
       {"similarity", "string", 0, 0, "histogram similarity of the division by name: g (eq. 1), chi2 or one a plugin adds"},
@@ -152,6 +170,9 @@ void Params::validate() const {
   if (occupied_connectivity != 6 && occupied_connectivity != 26)
     bad("occupied_connectivity", std::to_string(occupied_connectivity) + " is neither 6 nor 26");
   check("support_plane", support_plane);
+  check("object_gap", object_gap);
+  check("min_object_voxels", min_object_voxels);
+  check("min_pocket_voxels", min_pocket_voxels);
   check("threads", threads);
   if (!is_pow2(smax)) bad("smax", std::to_string(smax) + " is not a power of two");
   if (!is_pow2(smin)) bad("smin", std::to_string(smin) + " is not a power of two");
@@ -196,6 +217,9 @@ void set_param(Params& p, const std::string& name, const std::string& value) {
   else if (name == "gap_radius") p.gap_radius = static_cast<int>(v);
   else if (name == "occupied_connectivity") p.occupied_connectivity = static_cast<int>(v);
   else if (name == "support_plane") p.support_plane = static_cast<int>(v);
+  else if (name == "object_gap") p.object_gap = static_cast<int>(v);
+  else if (name == "min_object_voxels") p.min_object_voxels = static_cast<int>(v);
+  else if (name == "min_pocket_voxels") p.min_pocket_voxels = static_cast<int>(v);
   else if (name == "threads") p.threads = static_cast<int>(v);
 }
 
@@ -214,6 +238,9 @@ std::string get_param(const Params& p, const std::string& name) {
   else if (name == "gap_radius") o << p.gap_radius;
   else if (name == "occupied_connectivity") o << p.occupied_connectivity;
   else if (name == "support_plane") o << p.support_plane;
+  else if (name == "object_gap") o << p.object_gap;
+  else if (name == "min_object_voxels") o << p.min_object_voxels;
+  else if (name == "min_pocket_voxels") o << p.min_pocket_voxels;
   else if (name == "threads") o << p.threads;
   else if (name == "texture") o << p.texture;
   else if (name == "similarity") o << p.similarity;

@@ -16,6 +16,7 @@
 #include "rules/departures.hpp"
 #include "occseg/error.hpp"
 #include "occseg/parallel.hpp"
+#include "rules/objects.hpp"
 #include "rules/planes.hpp"
 #include "stages/refine.hpp"
 #include "occseg/registry.hpp"
@@ -129,6 +130,8 @@ Result segment_into(const Grid& grid, const Params& requested, bool keep_stages,
   check_map(grid, params.threads, !(op && op->native), k);
   Result r;
   r.dims = grid.dims;
+  r.voxel_size = grid.voxel_size;
+  r.origin = grid.origin;
   // A recycled array large enough is kept (resize_huge below); a smaller one would only be copied
   // into fresh storage.
   if (labels.capacity() < grid.dims.count()) labels = LabelArray();
@@ -229,10 +232,14 @@ Result segment_into(const Grid& grid, const Params& requested, bool keep_stages,
   // The states go in: they are freed inside, before the segment statistics.
   detail::label_components(std::move(states), grid, r.labels, r.segments, params.threads,
                            params.occupied_connectivity == 26, ws.run_starts, k);
-  // Part of "labelling" for callers: it decides which connected regions are separate objects.
-  if (params.preset == Preset::default_preset && params.support_plane > 0)
-    split_support_planes(grid, r.labels, r.segments, static_cast<std::size_t>(params.support_plane),
-                         params.occupied_connectivity == 26, params.threads, k);
+  // Part of "labelling" for callers: they decide which regions are objects.
+  if (params.preset == Preset::default_preset) {
+    group_objects(grid, r.labels, r.segments, params);
+    if (params.support_plane > 0)
+      split_support_planes(grid, r.labels, r.segments, static_cast<std::size_t>(params.support_plane),
+                           params.occupied_connectivity == 26, params.threads, k);
+  }
+  assign_kinds(r.segments, params, grid.dims);
   st.end();
   return r;
 }

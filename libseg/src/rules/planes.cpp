@@ -329,6 +329,7 @@ class Splitter {
   // The second step with what search() found for s: the split itself.
   void split(std::uint32_t s, const std::uint32_t* first, const std::uint32_t* last, const Found& found) {
     if (!found.split) return;
+    segs_[s].kind = Kind::structure;  // it lies mostly on a support plane, split or not
     list_members(s, first, last, members_);
     pts_.resize(members_.size());
     for (std::size_t m = 0; m < members_.size(); ++m) pts_[m] = coords(members_[m]);
