@@ -105,7 +105,7 @@ class Segments(collections.abc.Sequence):
         row = self._table[index]
         return Segment(int(row["id"]), State(int(row["state"])), int(row["voxels"]), float(row["mop"]),
                        (tuple(int(v) for v in row["bbox_min"]), tuple(int(v) for v in row["bbox_max"])),
-                       tuple(float(v) for v in row["centroid"]))
+                       tuple(float(v) for v in row["centroid"]), Kind(int(row["kind"])))
 
     def __iter__(self):
         return (self[i] for i in range(len(self)))
