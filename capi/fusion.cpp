@@ -47,7 +47,7 @@ struct Points {
   const double* doubles() const { return d.data(); }
 };
 
-Points read_points(const void* points, occseg_dtype dtype, std::size_t count, ptrdiff_t stride) {
+Points read_points(const void* points, const occseg_dtype& dtype, std::size_t count, ptrdiff_t stride) {
   require(points, "points");
   const int dt = occseg::capi::enum_value(dtype);
   if (dt != OCCSEG_F32 && dt != OCCSEG_F64)

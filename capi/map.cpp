@@ -128,7 +128,7 @@ void convert(float* out, const Dims& d, const char* base, int dtype, const ptrdi
 
 // The checks of occseg_map_from_buffer_flags and occseg_map_view_buffer, in their order: a map
 // with dims and voxel size set and `view` describing the buffer (strides filled in).
-std::unique_ptr<occseg_map> checked_map(occseg_map** out, const void* data, occseg_dtype dtype, const size_t dims[3],
+std::unique_ptr<occseg_map> checked_map(occseg_map** out, const void* data, const occseg_dtype& dtype, const size_t dims[3],
                                         const ptrdiff_t strides[3], double voxel_size, uint32_t flags) {
   require(out, "out");
   *out = nullptr;
