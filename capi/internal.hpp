@@ -136,4 +136,8 @@ int guard(const char* function, Body&& body) noexcept {
   }
 }
 
+// Creates `dir` (not its parents) when missing; true when this call created it. Error(io) when it
+// cannot be created or is not a directory (occseg_result_write and occseg_result_write_outputs).
+bool make_dir(const std::string& dir);
+
 }  // namespace occseg::capi

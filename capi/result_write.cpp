@@ -14,11 +14,11 @@
 using occseg::Error;
 using occseg::Status;
 using occseg::capi::guard;
+using occseg::capi::make_dir;
 using occseg::capi::require;
 
-namespace {
+namespace occseg::capi {
 
-// Creates `dir` when missing; true when this call created it.
 bool make_dir(const std::string& dir) {
   const bool made = ::mkdir(dir.c_str(), 0777) == 0;
   if (!made && errno != EEXIST) throw Error(Status::io, "cannot create '" + dir + "': " + std::strerror(errno));
@@ -27,7 +27,7 @@ bool make_dir(const std::string& dir) {
   return made;
 }
 
-}  // namespace
+}  // namespace occseg::capi
 
 extern "C" {
 

@@ -21,17 +21,10 @@
 using occseg::Error;
 using occseg::Status;
 using occseg::capi::guard;
+using occseg::capi::make_dir;
 using occseg::capi::require;
 
 namespace {
-
-bool make_dir(const std::string& dir) {
-  const bool made = ::mkdir(dir.c_str(), 0777) == 0;
-  if (!made && errno != EEXIST) throw Error(Status::io, "cannot create '" + dir + "': " + std::strerror(errno));
-  struct stat st {};
-  if (::stat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) throw Error(Status::io, "'" + dir + "' is not a directory");
-  return made;
-}
 
 using Writer = std::function<void(const std::string&, occseg::StagedFiles&)>;
 

@@ -384,24 +384,8 @@ void write_npy(const std::string& path, const std::string& descr, const std::vec
 }
 
 Grid grid_from_npy(const NpyArray& a, double voxel_size, const std::string& name) {
-  if (a.shape.size() != 3 && a.shape.size() != 2)
-    throw Error(Status::bad_dims, "'" + name + "' has " + std::to_string(a.shape.size()) +
-                                      " dimensions; a map is [z, y, x] (or [y, x] for 2D)");
-  Dims d;
-  d.nx = a.shape.back();
-  d.ny = a.shape[a.shape.size() - 2];
-  d.nz = a.shape.size() == 3 ? a.shape[0] : 1;
-  check_dims(d);
-  if (a.descr == "<u4" || a.descr == "<i4")
-    throw Error(Status::format, "'" + name + "' holds " + a.descr + " integers, not probabilities (use float32, float64, uint8 or uint16)");
-  Grid g;
-  g.dims = d;
-  g.voxel_size = voxel_size;
-  try {
-    check_geometry(g);
-  } catch (const Error& e) {
-    throw Error(e.status(), "'" + name + "': " + e.what());
-  }
+  Grid g = npy_grid_frame(a, voxel_size, name);
+  const Dims d = g.dims;
   g.p.resize(d.count());
   const std::size_t n = d.count();
   // The element type is decided once, not per voxel: one copy loop per dtype.
@@ -423,11 +407,7 @@ Grid grid_from_npy(const NpyArray& a, double voxel_size, const std::string& name
     convert([e](std::size_t k) { std::uint16_t v; std::memcpy(&v, e + 2 * k, 2); return static_cast<float>(v / 65535.0); });
   else
     convert([e](std::size_t k) { return static_cast<float>(e[k] / 255.0); });
-  try {
-    check_probabilities(g);
-  } catch (const Error& e) {
-    throw Error(e.status(), "'" + name + "': " + e.what());
-  }
+  checked_probabilities(g, name);
   return g;
 }
 
