@@ -167,13 +167,7 @@ int occseg_result_states_view(const occseg_result* result, const uint8_t** out, 
     // Made once (call_once: readers on several threads at once are allowed); a failed
     // allocation leaves it to be tried again by the next call.
     auto* r = const_cast<occseg_result*>(result);
-    std::call_once(r->states_once, [r] {
-      const auto& labels = r->result.labels;
-      const auto& segs = r->result.segments;
-      std::vector<uint8_t> s(labels.size());
-      for (std::size_t i = 0; i < labels.size(); ++i) s[i] = static_cast<uint8_t>(segs[labels[i]].state);
-      r->states = std::move(s);
-    });
+    std::call_once(r->states_once, [r] { r->states = occseg::voxel_states(r->result); });
     *out = r->states.data();
     *count = r->states.size();
   });
