@@ -9,6 +9,8 @@
 #include <sys/stat.h>
 
 #include <atomic>
+#include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <memory>
@@ -610,19 +612,19 @@ class ChangingFile {
     ::unlink(path.c_str());
     if (::mkfifo(path.c_str(), 0600) != 0) throw std::runtime_error("mkfifo failed");
     ::signal(SIGPIPE, SIG_IGN);  // a reader may close before the content is written
+    // The writer never blocks: it polls for a reader and writes without blocking, so the
+    // destructor can always stop it (a blocked open or write would hang the test).
     writer_ = std::thread([this, first = std::move(first), later = std::move(later)] {
-      for (int k = 0;; ++k) {
-        const int fd = ::open(path_.c_str(), O_WRONLY);  // waits for the next reader
-        if (stop_) {
-          if (fd >= 0) ::close(fd);
-          return;
-        }
+      for (int k = 0; !stop_; ++k) {
+        int fd = -1;
+        while (!stop_ && (fd = ::open(path_.c_str(), O_WRONLY | O_NONBLOCK)) < 0) pause();
         if (fd < 0) return;
         const std::string& b = k == 0 ? first : later;
-        for (std::size_t done = 0; done < b.size();) {
+        for (std::size_t done = 0; done < b.size() && !stop_;) {
           const ssize_t n = ::write(fd, b.data() + done, b.size() - done);
-          if (n <= 0) break;
-          done += static_cast<std::size_t>(n);
+          if (n > 0) done += static_cast<std::size_t>(n);
+          else if (n < 0 && errno == EAGAIN) pause();
+          else break;  // the reader closed (EPIPE)
         }
         ::close(fd);
         // The next content is for the next reader: wait until this one has closed the FIFO
@@ -632,20 +634,20 @@ class ChangingFile {
           if (probe < 0) break;
           ::close(probe);
           if (stop_) return;
-          std::this_thread::yield();
+          pause();
         }
       }
     });
   }
   ~ChangingFile() {
     stop_ = true;
-    const int fd = ::open(path_.c_str(), O_RDONLY | O_NONBLOCK);  // releases the waiting writer
     writer_.join();
-    if (fd >= 0) ::close(fd);
     ::unlink(path_.c_str());
   }
 
  private:
+  static void pause() { std::this_thread::sleep_for(std::chrono::milliseconds(1)); }
+
   std::string path_;
   std::atomic<bool> stop_{false};
   std::thread writer_;
