@@ -134,22 +134,29 @@ Grid grid_from_leaves(std::vector<Leaf>& leaves, double res, int depth, const Oc
   // logistic function is evaluated when the value changes only.
   float last_l = std::numeric_limits<float>::quiet_NaN();
   double p = 0.5;
+  // The leaf clipped to the box, in tree keys relative to lo; false when nothing is left.
+  auto clip = [&](const Leaf& leaf, long a[3], long b[3]) {
+    const long side = long(1) << leaf.level;
+    bool inside = true;
+    for (int k = 0; k < 3; ++k) {
+      a[k] = std::max(long(leaf.key[k]), lo[k]) - lo[k];
+      b[k] = std::min(long(leaf.key[k]) + side, lo[k] + long(n[k]) * f) - lo[k];
+      inside = inside && a[k] < b[k];
+    }
+    return inside;
+  };
+  auto probability = [&](const Leaf& leaf) {
+    if (!(leaf.log_odds == last_l)) {
+      last_l = leaf.log_odds;
+      p = 1.0 / (1.0 + std::exp(-double(last_l)));
+    }
+    return static_cast<float>(p);
+  };
   if (f == 1 && !mean) {  // the tree's own resolution: keys are voxel indices, no division
     for (const Leaf& leaf : leaves) {
-      const long side = long(1) << leaf.level;
       long a[3], b[3];
-      bool inside = true;
-      for (int k = 0; k < 3; ++k) {
-        a[k] = std::max(long(leaf.key[k]), lo[k]) - lo[k];
-        b[k] = std::min(long(leaf.key[k]) + side, lo[k] + long(n[k])) - lo[k];
-        inside = inside && a[k] < b[k];
-      }
-      if (!inside) continue;
-      if (!(leaf.log_odds == last_l)) {
-        last_l = leaf.log_odds;
-        p = 1.0 / (1.0 + std::exp(-double(last_l)));
-      }
-      const float pf = static_cast<float>(p);
+      if (!clip(leaf, a, b)) continue;
+      const float pf = probability(leaf);
       for (long z = a[2]; z < b[2]; ++z)
         for (long y = a[1]; y < b[1]; ++y) {
           float* v = g.p.data() + g.index(0, std::size_t(y), std::size_t(z));
@@ -159,20 +166,9 @@ Grid grid_from_leaves(std::vector<Leaf>& leaves, double res, int depth, const Oc
     leaves.clear();  // painted
   }
   for (const Leaf& leaf : leaves) {
-    const long side = long(1) << leaf.level;
-    long a[3], b[3];  // the leaf clipped to the box, in keys relative to lo
-    bool inside = true;
-    for (int k = 0; k < 3; ++k) {
-      a[k] = std::max(long(leaf.key[k]), lo[k]) - lo[k];
-      b[k] = std::min(long(leaf.key[k]) + side, lo[k] + long(n[k]) * f) - lo[k];
-      inside = inside && a[k] < b[k];
-    }
-    if (!inside) continue;
-    if (!(leaf.log_odds == last_l)) {
-      last_l = leaf.log_odds;
-      p = 1.0 / (1.0 + std::exp(-double(last_l)));
-    }
-    const float pf = static_cast<float>(p);
+    long a[3], b[3];
+    if (!clip(leaf, a, b)) continue;
+    const float pf = probability(leaf);
     const long x0 = a[0] / f, x1 = (b[0] - 1) / f;
     for (long cz = a[2] / f; cz <= (b[2] - 1) / f; ++cz)
       for (long cy = a[1] / f; cy <= (b[1] - 1) / f; ++cy) {
