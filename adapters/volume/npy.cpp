@@ -8,17 +8,13 @@
 #include <iterator>
 #include <limits>
 #include <sstream>
-#include <type_traits>
 
 #include "occseg/error.hpp"
+#include "occseg/fill_values.hpp"
 #include "occseg/file_read.hpp"
 #include "occseg/file_write.hpp"
 #include "occseg/geometry.hpp"
 #include "occseg/parallel.hpp"
-
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
 
 namespace occseg {
 
@@ -279,40 +275,10 @@ void checked_probabilities(const Grid& g, const std::string& name) {
 }
 
 // Threads for a pass over `bytes` bytes: all of `threads` for large ones (at most 8: copying from
-// the page cache and zeroing fresh pages are bounded by memory bandwidth, not by cores), one for
-// what is not worth starting a thread for.
+// the page cache is bounded by memory bandwidth, not by cores), one for what is not worth
+// starting a thread for.
 int pass_threads(std::size_t bytes, int threads) {
   return bytes >= (std::size_t(8) << 20) ? std::min(resolve_threads(threads), 8) : 1;
-}
-
-// Storage for `n` elements in `v` (value-initialised, as resize does). Its pages are asked to be
-// 2 MB ones (as NumPy asks for its large arrays: a 52 MB map takes 26 page faults instead of
-// 12,800; a hint, where the system has none) and faulted in by `threads` threads, one byte a 4 KB
-// page, before resize zeroes them: the kernel's clearing of fresh pages is then split over the
-// threads instead of being done by the one that zeroes.
-template <class T>
-void resize_on_huge_pages(std::vector<T>& v, std::size_t n, int threads) {
-  static_assert(std::is_trivial<T>::value, "the storage is touched before its elements exist");
-  v.clear();
-  v.shrink_to_fit();
-  v.reserve(n);
-  const std::size_t bytes = n * sizeof(T);
-  auto* const p = reinterpret_cast<unsigned char*>(v.data());
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-  constexpr std::uintptr_t kHuge = std::uintptr_t(1) << 21;
-  const auto b = reinterpret_cast<std::uintptr_t>(p);
-  const std::uintptr_t lo = (b + kHuge - 1) & ~(kHuge - 1), hi = (b + bytes) & ~(kHuge - 1);
-  if (hi > lo) ::madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);
-#endif
-  const int t = pass_threads(bytes, threads);
-  if (t > 1) {
-    constexpr std::size_t kPage = 4096, kPiece = std::size_t(1) << 21;
-    volatile unsigned char* const q = p;
-    parallel_for((bytes + kPiece - 1) / kPiece, t, [&](std::size_t k0, std::size_t k1) {
-      for (std::size_t i = k0 * kPiece, e = std::min(bytes, k1 * kPiece); i < e; i += kPage) q[i] = 0;
-    });
-  }
-  v.resize(n);
 }
 
 // Reads the `n` data bytes of the file from `offset`, in pieces of whole elements that `threads`
@@ -427,7 +393,7 @@ void with_element(const std::string& descr, Fn&& fn) {
 bool read_converted(const InputFile& f, std::size_t offset, const NpyArray& a, Grid& g, const std::string& path,
                     const IoProgress& progress, int threads) {
   const std::size_t isz = item_size(a.descr), n = g.dims.count();
-  resize_on_huge_pages(g.p, n, threads);
+  resize_for_fill(g.p, n, threads);
   float* const out = g.p.data();
   bool ok = true;
   with_element(a.descr, [&](auto value) {
@@ -449,7 +415,7 @@ bool read_converted(const InputFile& f, std::size_t offset, const NpyArray& a, G
 bool convert_array(const NpyArray& a, Grid& g, int threads) {
   const Dims d = g.dims;
   const std::size_t n = d.count();
-  resize_on_huge_pages(g.p, n, threads);
+  resize_for_fill(g.p, n, threads);
   float* const out = g.p.data();
   const unsigned char* const e = a.data.data();
   const int t = pass_threads(n * sizeof(float), threads);
@@ -522,7 +488,7 @@ Grid read_npy_grid(const std::string& path, double voxel_size, NpyArray* header,
   const std::size_t n = g.dims.count(), bytes = n * item_size(a.descr);
   bool values_ok = false;
   if (a.descr == "<f4" && !a.fortran_order && !a.big_endian) {  // the file's bytes are the grid's
-    resize_on_huge_pages(g.p, n, threads);
+    resize_for_fill(g.p, n, threads);
     unsigned char* const to = reinterpret_cast<unsigned char*>(g.p.data());
     values_ok = read_body(f, data_at, bytes, path, progress, threads, false,
                           [to](std::size_t b, unsigned char*) { return to + b; },
@@ -532,7 +498,7 @@ Grid read_npy_grid(const std::string& path, double voxel_size, NpyArray* header,
   } else if (!a.fortran_order) {
     values_ok = read_converted(f, data_at, a, g, path, progress, threads);
   } else {
-    resize_on_huge_pages(a.data, bytes, threads);
+    a.data.resize(bytes);
     unsigned char* const to = a.data.data();
     read_body(f, data_at, bytes, path, progress, threads, false, [to](std::size_t b, unsigned char*) { return to + b; },
               [](std::size_t, const unsigned char*, std::size_t) { return true; });
