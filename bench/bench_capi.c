@@ -1,12 +1,14 @@
 /* Helper of bench/compare: the C ABI as a program uses it, timed in-process.
- *   occseg_bench_capi RAW NX NY NZ PRESET THREADS REPEATS view|copy
+ *   occseg_bench_capi RAW NX NY NZ PRESET THREADS REPEATS view|copy [f32|f64|u8|u16]
  * RAW holds nx * ny * nz float32 probabilities, x fastest (numpy's tofile of a C-order [z, y, x]
  * array). Each timed call makes the map (view: occseg_map_view_buffer, no copy; copy:
  * occseg_map_from_buffer), segments it (occseg_segment) and reads the labels (view:
  * occseg_result_labels_view; copy: occseg_result_labels into the program's array). Prints one
  * JSON line: best and median seconds, the stages' seconds of the best call and their sum, the
  * peak memory beyond the program's buffers (first and second call, larger reported), a checksum of
- * the labels. */
+ * the labels. The last argument (default f32) is the dtype of the program's buffer: the floats of
+ * RAW converted to it before anything is measured (u8/u16: round(p * max)), so the peak beyond
+ * the program's buffers shows what a borrowed map of that dtype costs. */
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -58,9 +60,20 @@ int main(int argc, char **argv) {
   const char *names[8] = {0};
   uint32_t nstages = 0, segments = 0;
   uint64_t checksum = 1469598103934665603ull;
-  if (argc != 9 || (strcmp(argv[8], "view") && strcmp(argv[8], "copy"))) {
-    fprintf(stderr, "usage: occseg_bench_capi RAW NX NY NZ PRESET THREADS REPEATS view|copy\n");
+  occseg_dtype dtype = OCCSEG_F32;
+  void *buffer;
+  if ((argc != 9 && argc != 10) || (strcmp(argv[8], "view") && strcmp(argv[8], "copy"))) {
+    fprintf(stderr, "usage: occseg_bench_capi RAW NX NY NZ PRESET THREADS REPEATS view|copy [f32|f64|u8|u16]\n");
     return 1;
+  }
+  if (argc == 10) {
+    if (strcmp(argv[9], "f64") == 0) dtype = OCCSEG_F64;
+    else if (strcmp(argv[9], "u8") == 0) dtype = OCCSEG_U8;
+    else if (strcmp(argv[9], "u16") == 0) dtype = OCCSEG_U16;
+    else if (strcmp(argv[9], "f32") != 0) {
+      fprintf(stderr, "occseg_bench_capi: dtype '%s' is not f32, f64, u8 or u16\n", argv[9]);
+      return 1;
+    }
   }
   for (k = 0; k < 3; ++k) dims[k] = (size_t)strtoull(argv[2 + k], NULL, 10);
   n = dims[0] * dims[1] * dims[2];
@@ -75,6 +88,22 @@ int main(int argc, char **argv) {
     return 1;
   }
   fclose(f);
+  buffer = p;
+  if (dtype != OCCSEG_F32) { /* the program's buffer in its dtype; the floats are freed */
+    const size_t size = dtype == OCCSEG_F64 ? 8 : dtype == OCCSEG_U16 ? 2 : 1;
+    buffer = malloc(n * size);
+    if (!buffer) {
+      fprintf(stderr, "occseg_bench_capi: out of memory\n");
+      return 1;
+    }
+    for (i = 0; i < n; ++i) {
+      if (dtype == OCCSEG_F64) ((double *)buffer)[i] = p[i];
+      else if (dtype == OCCSEG_U16) ((uint16_t *)buffer)[i] = (uint16_t)(p[i] * 65535.0 + 0.5);
+      else ((uint8_t *)buffer)[i] = (uint8_t)(p[i] * 255.0 + 0.5);
+    }
+    free(p);
+    p = NULL;
+  }
   if (!view) memset(copy_out, 0, n * sizeof *copy_out); /* the program's own array: paged in */
   if (occseg_params_create(&params) || occseg_params_set(params, "preset", argv[5]) ||
       occseg_params_set(params, "threads", argv[6])) {
@@ -89,8 +118,8 @@ int main(int argc, char **argv) {
     const uint32_t *labels = NULL;
     size_t count = 0;
     const double t0 = now();
-    int rc = view ? occseg_map_view_buffer(&map, p, OCCSEG_F32, dims, NULL, 1.0, 0)
-                  : occseg_map_from_buffer(&map, p, OCCSEG_F32, dims, NULL, 1.0);
+    int rc = view ? occseg_map_view_buffer(&map, buffer, dtype, dims, NULL, 1.0, 0)
+                  : occseg_map_from_buffer(&map, buffer, dtype, dims, NULL, 1.0);
     if (rc == 0) rc = occseg_segment(&res, map, params);
     if (rc == 0 && view) rc = occseg_result_labels_view(res, &labels, &count);
     if (rc == 0 && !view) rc = occseg_result_labels(res, copy_out, n);
@@ -134,7 +163,7 @@ int main(int argc, char **argv) {
   for (r = 0; r < (int)nstages; ++r) printf("%s\"%s\": %.6f", r ? ", " : "", names[r], stages[r]);
   printf("}}\n");
   occseg_params_free(params);
-  free(p);
+  free(buffer);
   free(totals);
   free(copy_out);
   return 0;

@@ -79,7 +79,8 @@ Grid grid_of(const occseg_plugin_grid* v) {
 int read_npy_map(const occseg_plugin_call* call, const char* path, const char* const* options, occseg_plugin_map_sink* sink) {
   return guarded(call, [&] {
     const double vs = voxel_size_option(path, options, true);
-    deliver(call, sink, occseg::grid_from_npy(occseg::read_npy(path), vs, path));
+    // One pass from the file into the grid, checked; the grid itself is the map (no map_alloc copy).
+    occseg::deliver_grid(sink, occseg::read_npy_grid(path, vs, nullptr, {}, static_cast<int>(call->threads)));
   });
 }
 

@@ -1,5 +1,6 @@
 // occseg_map_*: maps from caller buffers (any dtype, any non-overlapping strides) and .npy files.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -9,7 +10,9 @@
 #include "internal.hpp"
 #include "occseg/geometry.hpp"
 #include "occseg/map_yaml.hpp"
+#include "occseg/fill_values.hpp"
 #include "occseg/npy.hpp"
+#include "occseg/parallel.hpp"
 
 using occseg::Dims;
 using occseg::Error;
@@ -106,24 +109,56 @@ float occupancy(int8_t v, std::size_t x, std::size_t y, std::size_t z) {
                                      " is neither -1 (unknown) nor an occupancy in 0..100");
 }
 
+// Rows [r0, r1) (row r = y + ny * z) of the buffer as probabilities into out[x + nx * r].
+template <class Value>
+void convert_rows(float* out, const Dims& d, const char* base, const ptrdiff_t s[3], std::size_t r0, std::size_t r1,
+                  Value value) {
+  for (std::size_t r = r0; r < r1; ++r) {
+    const std::size_t z = r / d.ny, y = r % d.ny;
+    const char* row = base + static_cast<ptrdiff_t>(z) * s[2] + static_cast<ptrdiff_t>(y) * s[1];
+    float* const o = out + r * d.nx;
+    for (std::size_t x = 0; x < d.nx; ++x) o[x] = value(row + static_cast<ptrdiff_t>(x) * s[0], x, y, z);
+  }
+}
+
 // The buffer's values as probabilities into out[x + nx * (y + ny * z)], checked as documented
-// for occseg_map_from_buffer (the first bad voxel in x-fastest order is named).
+// for occseg_map_from_buffer (the first bad voxel in x-fastest order is named). Large maps are
+// converted by several threads; when one of them meets a bad value, the rows are converted again
+// in order on this thread, which names the first one.
 void convert(float* out, const Dims& d, const char* base, int dtype, const ptrdiff_t s[3], uint32_t flags) {
-  for (std::size_t z = 0; z < d.nz; ++z)
-    for (std::size_t y = 0; y < d.ny; ++y) {
-      const char* row = base + static_cast<ptrdiff_t>(z) * s[2] + static_cast<ptrdiff_t>(y) * s[1];
-      for (std::size_t x = 0; x < d.nx; ++x, ++out) {
-        const char* e = row + static_cast<ptrdiff_t>(x) * s[0];
-        switch (dtype) {
-          case OCCSEG_F32: *out = probability(load<float>(e), flags, x, y, z); break;
-          case OCCSEG_F64: *out = probability(load<double>(e), flags, x, y, z); break;
-          // Same conversion as the .npy reader, so both paths give identical maps.
-          case OCCSEG_U8: *out = static_cast<float>(load<uint8_t>(e) / 255.0); break;
-          case OCCSEG_I8_OCCUPANCY: *out = occupancy(load<int8_t>(e), x, y, z); break;
-          default: *out = static_cast<float>(load<uint16_t>(e) / 65535.0); break;
+  auto run = [&](auto value) {
+    const std::size_t rows = d.ny * d.nz;
+    const int t = d.count() >= (std::size_t(1) << 21) ? std::min(occseg::resolve_threads(0), 8) : 1;
+    std::atomic<bool> bad{false};
+    if (t > 1) {
+      occseg::parallel_for(rows, t, [&](std::size_t r0, std::size_t r1) {
+        try {
+          convert_rows(out, d, base, s, r0, r1, value);
+        } catch (const Error&) {
+          bad.store(true);
         }
-      }
+      });
     }
+    if (t <= 1 || bad.load()) convert_rows(out, d, base, s, 0, rows, value);
+  };
+  switch (dtype) {
+    case OCCSEG_F32:
+      run([flags](const char* e, std::size_t x, std::size_t y, std::size_t z) { return probability(load<float>(e), flags, x, y, z); });
+      break;
+    case OCCSEG_F64:
+      run([flags](const char* e, std::size_t x, std::size_t y, std::size_t z) { return probability(load<double>(e), flags, x, y, z); });
+      break;
+    // Same conversion as the .npy reader, so both paths give identical maps.
+    case OCCSEG_U8:
+      run([](const char* e, std::size_t, std::size_t, std::size_t) { return static_cast<float>(load<uint8_t>(e) / 255.0); });
+      break;
+    case OCCSEG_I8_OCCUPANCY:
+      run([](const char* e, std::size_t x, std::size_t y, std::size_t z) { return occupancy(load<int8_t>(e), x, y, z); });
+      break;
+    default:
+      run([](const char* e, std::size_t, std::size_t, std::size_t) { return static_cast<float>(load<uint16_t>(e) / 65535.0); });
+      break;
+  }
 }
 
 // The checks of occseg_map_from_buffer_flags and occseg_map_view_buffer, in their order: a map
@@ -205,7 +240,7 @@ Grid converted(const occseg_map* map) {
   copy.dims = map->grid.dims;
   copy.voxel_size = map->grid.voxel_size;
   copy.origin = map->grid.origin;
-  copy.p.resize(copy.dims.count());
+  occseg::resize_for_fill(copy.p, copy.dims.count(), 0);
   convert(copy.p.data(), copy.dims, v.data, v.dtype, v.strides, v.flags);
   return copy;
 }
@@ -218,7 +253,7 @@ int occseg_map_from_buffer_flags(occseg_map** out, const void* data, occseg_dtyp
                                  const ptrdiff_t strides[3], double voxel_size, uint32_t flags) {
   return guard("occseg_map_from_buffer", [&] {
     auto m = checked_map(out, data, dtype, dims, strides, voxel_size, flags);
-    m->grid.p.resize(m->grid.dims.count());
+    occseg::resize_for_fill(m->grid.p, m->grid.dims.count(), 0);
     convert(m->grid.p.data(), m->grid.dims, m->view.data, m->view.dtype, m->view.strides, flags);
     m->view = occseg_map::View();
     *out = m.release();

@@ -74,6 +74,22 @@ std::size_t InputFile::read(void* buf, std::size_t n) {
   return done;
 }
 
+std::size_t InputFile::read_at(std::size_t offset, void* buf, std::size_t n) const {
+  auto* p = static_cast<char*>(buf);
+  std::size_t done = 0;
+  while (done < n) {
+    const ssize_t r = ::pread(fd_, p + done, std::min<std::size_t>(n - done, std::size_t(1) << 30),
+                              static_cast<off_t>(offset + done));
+    if (r == 0) break;
+    if (r < 0) {
+      if (errno == EINTR) continue;
+      throw Error(Status::io, "cannot read '" + path_ + "': " + std::strerror(errno));
+    }
+    done += static_cast<std::size_t>(r);
+  }
+  return done;
+}
+
 void check_readable(const std::string& path) {
   struct stat st {};
   Closer closer{open_file(path, st)};

@@ -1,16 +1,20 @@
 #include "occseg/npy.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <sstream>
 
 #include "occseg/error.hpp"
+#include "occseg/fill_values.hpp"
 #include "occseg/file_read.hpp"
 #include "occseg/file_write.hpp"
 #include "occseg/geometry.hpp"
+#include "occseg/parallel.hpp"
 
 namespace occseg {
 
@@ -270,37 +274,183 @@ void checked_probabilities(const Grid& g, const std::string& name) {
   }
 }
 
-// Reads `n` bytes of the file into `to` in pieces, reporting progress; a file that ends early
-// (it shrank since it was opened) is the truncation it is.
-// `piece_ok` (if given) checks each piece as soon as it is read, while it is in the cache; returns
-// false when some piece failed it.
-bool read_body(InputFile& f, unsigned char* to, std::size_t n, const std::string& name, const IoProgress& progress,
-               bool (*piece_ok)(const unsigned char*, std::size_t) = nullptr) {
-  constexpr std::size_t kPiece = std::size_t(1) << 20, kReport = std::size_t(1) << 24;
-  bool ok = true;
-  for (std::size_t at = 0, reported = 0; at < n;) {
-    const std::size_t want = std::min(kPiece, n - at), got = f.read(to + at, want);
-    if (piece_ok && ok) ok = piece_ok(to + at, got);
-    at += got;
-    if (got < want)
-      fail(name, "truncated data: header promises " + std::to_string(n) + " bytes, file has " + std::to_string(at));
-    if (at - reported >= kReport || at == n) {
-      report_progress(progress, double(at) / double(n));
-      reported = at;
-    }
+// Threads for a pass over `bytes` bytes: all of `threads` for large ones (at most 8: copying from
+// the page cache is bounded by memory bandwidth, not by cores), one for what is not worth
+// starting a thread for.
+int pass_threads(std::size_t bytes, int threads) {
+  return bytes >= (std::size_t(8) << 20) ? std::min(resolve_threads(threads), 8) : 1;
+}
+
+// Reads the `n` data bytes of the file from `offset`, in pieces of whole elements that `threads`
+// threads read at once (pread), reporting progress from the calling thread between groups of
+// pieces; a file that ends early (it shrank since it was opened) is the truncation it is, with the
+// count of the data bytes it still has. Each piece goes where `place(b, scratch)` says (the data
+// byte b's place in the final array, or the reading thread's scratch of kPiece bytes) and is
+// handed to `take(b, piece, bytes)` by the thread that read it, at once, while it is in that
+// core's cache: it converts and checks it there, so the bytes checked are the bytes kept, read
+// once. Returns false when `take` found some piece's values bad.
+constexpr std::size_t kPiece = std::size_t(1) << 19;
+
+template <class Place, class Take>
+bool read_body(const InputFile& f, std::size_t offset, std::size_t n, const std::string& name, const IoProgress& progress,
+               int threads, bool staged, Place place, Take take) {
+  constexpr std::size_t kGroup = std::size_t(1) << 24;
+  std::atomic<bool> ok{true};
+  std::atomic<std::size_t> short_at{n};  // the lowest end of a short piece: where the file ends
+  const int t = pass_threads(n, threads);
+  for (std::size_t g0 = 0; g0 < n; g0 += kGroup) {
+    const std::size_t g1 = std::min(n, g0 + kGroup), pieces = (g1 - g0 + kPiece - 1) / kPiece;
+    parallel_for(pieces, t, [&](std::size_t k0, std::size_t k1) {
+      UninitVector<unsigned char> scratch(staged ? kPiece : 0);
+      for (std::size_t k = k0; k < k1; ++k) {
+        const std::size_t b = g0 + k * kPiece, want = std::min(kPiece, g1 - b);
+        unsigned char* const to = place(b, scratch.data());
+        const std::size_t got = f.read_at(offset + b, to, want);
+        if (got < want) {
+          std::size_t seen = short_at.load();
+          while (b + got < seen && !short_at.compare_exchange_weak(seen, b + got)) {
+          }
+          return;
+        }
+        if (!take(b, to, got)) ok.store(false, std::memory_order_relaxed);
+      }
+    });
+    if (short_at.load() < n)
+      fail(name, "truncated data: header promises " + std::to_string(n) + " bytes, file has " + std::to_string(short_at.load()));
+    report_progress(progress, double(g1) / double(n));
   }
-  return ok;
+  return ok.load();
 }
 
 // The elements of a big-endian array in the machine's (little-endian) order.
 void swap_to_little_endian(const NpyArray& a, unsigned char* bytes, std::size_t n) {
-  const std::size_t isz = item_size(a.descr);
-  if (!a.big_endian || isz < 2) return;
-  for (std::size_t i = 0; i + isz <= n; i += isz) std::reverse(bytes + i, bytes + i + isz);
+  if (!a.big_endian) return;
+  switch (item_size(a.descr)) {
+    case 2:
+      for (std::size_t i = 0; i + 2 <= n; i += 2) {
+        std::uint16_t v;
+        std::memcpy(&v, bytes + i, 2);
+        v = __builtin_bswap16(v);
+        std::memcpy(bytes + i, &v, 2);
+      }
+      break;
+    case 4:
+      for (std::size_t i = 0; i + 4 <= n; i += 4) {
+        std::uint32_t v;
+        std::memcpy(&v, bytes + i, 4);
+        v = __builtin_bswap32(v);
+        std::memcpy(bytes + i, &v, 4);
+      }
+      break;
+    case 8:
+      for (std::size_t i = 0; i + 8 <= n; i += 8) {
+        std::uint64_t v;
+        std::memcpy(&v, bytes + i, 8);
+        v = __builtin_bswap64(v);
+        std::memcpy(bytes + i, &v, 8);
+      }
+      break;
+    default:
+      break;
+  }
 }
 
-bool floats_in_range(const unsigned char* bytes, std::size_t n) {
-  return probabilities_in_range(reinterpret_cast<const float*>(bytes), n / sizeof(float));
+// float(v / max) for every v of an unsigned integer type, computed once: a table look-up instead
+// of a division per voxel, the same values.
+template <class U>
+const float* integer_probabilities() {
+  static const std::vector<float> table = [] {
+    constexpr std::size_t max = std::numeric_limits<U>::max();
+    std::vector<float> t(max + 1);
+    for (std::size_t v = 0; v <= max; ++v) t[v] = static_cast<float>(double(v) / double(max));
+    return t;
+  }();
+  return table.data();
+}
+
+// Calls fn with the reader of one element of the array's dtype (element k of little-endian
+// bytes e, as a probability): the type is decided once, not per voxel. u1 and u2 map 0..max to
+// 0..1; f8 is rounded to float.
+template <class Fn>
+void with_element(const std::string& descr, Fn&& fn) {
+  if (descr == "<f4")
+    fn([](const unsigned char* e, std::size_t k) { float v; std::memcpy(&v, e + 4 * k, 4); return v; });
+  else if (descr == "<f8")
+    fn([](const unsigned char* e, std::size_t k) { double v; std::memcpy(&v, e + 8 * k, 8); return static_cast<float>(v); });
+  else if (descr == "<u2")
+    fn([t = integer_probabilities<std::uint16_t>()](const unsigned char* e, std::size_t k) {
+      std::uint16_t v;
+      std::memcpy(&v, e + 2 * k, 2);
+      return t[v];
+    });
+  else
+    fn([t = integer_probabilities<std::uint8_t>()](const unsigned char* e, std::size_t k) { return t[e[k]]; });
+}
+
+// The samples of a C-order array of any dtype straight from the file into the grid: each piece is
+// read into its thread's scratch, swapped, converted into its place in g.p and checked there.
+// Fortran order is read whole first (a row of the grid takes one element of every plane).
+bool read_converted(const InputFile& f, std::size_t offset, const NpyArray& a, Grid& g, const std::string& path,
+                    const IoProgress& progress, int threads) {
+  const std::size_t isz = item_size(a.descr), n = g.dims.count();
+  resize_for_fill(g.p, n, threads);
+  float* const out = g.p.data();
+  bool ok = true;
+  with_element(a.descr, [&](auto value) {
+    ok = read_body(f, offset, n * isz, path, progress, threads, true,
+                   [](std::size_t, unsigned char* scratch) { return scratch; },
+                   [&](std::size_t b, unsigned char* piece, std::size_t bytes) {
+                     swap_to_little_endian(a, piece, bytes);
+                     float* const o = out + b / isz;
+                     const std::size_t count = bytes / isz;
+                     for (std::size_t i = 0; i < count; ++i) o[i] = value(piece, i);
+                     return probabilities_in_range(o, count);
+                   });
+  });
+  return ok;
+}
+
+// The grid's values from a whole array (any dtype, C or Fortran order), in blocks over `threads`
+// threads, each block checked as soon as it is written; false when some value is bad.
+bool convert_array(const NpyArray& a, Grid& g, int threads) {
+  const Dims d = g.dims;
+  const std::size_t n = d.count();
+  resize_for_fill(g.p, n, threads);
+  float* const out = g.p.data();
+  const unsigned char* const e = a.data.data();
+  const int t = pass_threads(n * sizeof(float), threads);
+  std::atomic<bool> ok{true};
+  with_element(a.descr, [&](auto value) {
+    if (!a.fortran_order) {
+      constexpr std::size_t kBlock = std::size_t(1) << 14;
+      parallel_for((n + kBlock - 1) / kBlock, t, [&](std::size_t k0, std::size_t k1) {
+        for (std::size_t k = k0; k < k1; ++k) {
+          const std::size_t i0 = k * kBlock, i1 = std::min(n, i0 + kBlock);
+          for (std::size_t i = i0; i < i1; ++i) out[i] = value(e, i);
+          if (!probabilities_in_range(out + i0, i1 - i0)) ok.store(false, std::memory_order_relaxed);
+        }
+      });
+      return;
+    }
+    // The file index of [z, y, x] is z + nz * (y + ny * x). Per y, tiles of 16 x by every z: the
+    // tile's 16 runs along z in the file are read side by side, each grid line is written whole
+    // (a row of the grid alone would take one element of every plane of the file).
+    constexpr std::size_t kTile = 16;
+    parallel_for(d.ny, t, [&](std::size_t y0, std::size_t y1) {
+      for (std::size_t y = y0; y < y1; ++y) {
+        for (std::size_t x0 = 0; x0 < d.nx; x0 += kTile) {
+          const std::size_t x1 = std::min(d.nx, x0 + kTile);
+          for (std::size_t z = 0; z < d.nz; ++z) {
+            float* const o = out + (z * d.ny + y) * d.nx;
+            for (std::size_t x = x0; x < x1; ++x) o[x] = value(e, z + d.nz * (y + d.ny * x));
+          }
+        }
+        for (std::size_t z = 0; z < d.nz; ++z)
+          if (!probabilities_in_range(out + (z * d.ny + y) * d.nx, d.nx)) ok.store(false, std::memory_order_relaxed);
+      }
+    });
+  });
+  return ok.load();
 }
 
 }  // namespace
@@ -314,7 +464,7 @@ NpyArray parse_npy(const unsigned char* b, std::size_t size, const std::string& 
   return a;
 }
 
-Grid read_npy_grid(const std::string& path, double voxel_size, NpyArray* header, const IoProgress& progress) {
+Grid read_npy_grid(const std::string& path, double voxel_size, NpyArray* header, const IoProgress& progress, int threads) {
   InputFile f(path);
   // The fixed prefix (magic, version, header length), then the header it announces.
   std::vector<unsigned char> head(12);
@@ -337,15 +487,23 @@ Grid read_npy_grid(const std::string& path, double voxel_size, NpyArray* header,
   Grid g = npy_grid_frame(a, voxel_size, path);
   const std::size_t n = g.dims.count(), bytes = n * item_size(a.descr);
   bool values_ok = false;
-  if (a.descr == "<f4" && !a.fortran_order && !a.big_endian) {
-    g.p.resize(n);
-    values_ok = read_body(f, reinterpret_cast<unsigned char*>(g.p.data()), bytes, path, progress, floats_in_range);
+  if (a.descr == "<f4" && !a.fortran_order && !a.big_endian) {  // the file's bytes are the grid's
+    resize_for_fill(g.p, n, threads);
+    unsigned char* const to = reinterpret_cast<unsigned char*>(g.p.data());
+    values_ok = read_body(f, data_at, bytes, path, progress, threads, false,
+                          [to](std::size_t b, unsigned char*) { return to + b; },
+                          [](std::size_t, const unsigned char* piece, std::size_t got) {
+                            return probabilities_in_range(reinterpret_cast<const float*>(piece), got / sizeof(float));
+                          });
+  } else if (!a.fortran_order) {
+    values_ok = read_converted(f, data_at, a, g, path, progress, threads);
   } else {
     a.data.resize(bytes);
-    read_body(f, a.data.data(), bytes, path, progress);
+    unsigned char* const to = a.data.data();
+    read_body(f, data_at, bytes, path, progress, threads, false, [to](std::size_t b, unsigned char*) { return to + b; },
+              [](std::size_t, const unsigned char*, std::size_t) { return true; });
     swap_to_little_endian(a, a.data.data(), bytes);
-    g = grid_from_npy(a, voxel_size, path);  // checks the values it converts
-    values_ok = true;
+    values_ok = convert_array(a, g, threads);
   }
   if (!values_ok) checked_probabilities(g, path);  // names the first bad voxel
   if (header) {
@@ -385,29 +543,7 @@ void write_npy(const std::string& path, const std::string& descr, const std::vec
 
 Grid grid_from_npy(const NpyArray& a, double voxel_size, const std::string& name) {
   Grid g = npy_grid_frame(a, voxel_size, name);
-  const Dims d = g.dims;
-  g.p.resize(d.count());
-  const std::size_t n = d.count();
-  // The element type is decided once, not per voxel: one copy loop per dtype.
-  auto convert = [&](auto value) {
-    if (!a.fortran_order) {
-      for (std::size_t i = 0; i < n; ++i) g.p[i] = value(i);
-    } else {  // file index of [z, y, x] is z + nz * (y + ny * x)
-      for (std::size_t z = 0, i = 0; z < d.nz; ++z)
-        for (std::size_t y = 0; y < d.ny; ++y)
-          for (std::size_t x = 0; x < d.nx; ++x, ++i) g.p[i] = value(z + d.nz * (y + d.ny * x));
-    }
-  };
-  const unsigned char* e = a.data.data();
-  if (a.descr == "<f4")
-    convert([e](std::size_t k) { float v; std::memcpy(&v, e + 4 * k, 4); return v; });
-  else if (a.descr == "<f8")
-    convert([e](std::size_t k) { double v; std::memcpy(&v, e + 8 * k, 8); return static_cast<float>(v); });
-  else if (a.descr == "<u2")
-    convert([e](std::size_t k) { std::uint16_t v; std::memcpy(&v, e + 2 * k, 2); return static_cast<float>(v / 65535.0); });
-  else
-    convert([e](std::size_t k) { return static_cast<float>(e[k] / 255.0); });
-  checked_probabilities(g, name);
+  if (!convert_array(a, g, 0)) checked_probabilities(g, name);  // names the first bad voxel
   return g;
 }
 

@@ -190,7 +190,7 @@ MapInput load_map(const std::string& path, const MapInputOptions& o) {
     in.kind = InputKind::volume;
     if (ext == ".npy") {
       NpyArray a;
-      in.grid = read_npy_grid(path, o.voxel_size.value_or(1.0), &a, o.read_progress);
+      in.grid = read_npy_grid(path, o.voxel_size.value_or(1.0), &a, o.read_progress, o.threads);
       in.format = "NumPy .npy, " + npy_type(a.descr) + (a.big_endian ? " big-endian" : "") + (a.fortran_order ? ", Fortran order" : ", C order");
     } else {
       const NrrdVolume v = read_nrrd(path, o.read_progress);

@@ -27,6 +27,10 @@ class InputFile {
   // Reads up to `n` bytes into `buf`; fewer only at the end of the file. Throws Error(io)
   // "cannot read 'path': <reason>".
   std::size_t read(void* buf, std::size_t n);
+  // Reads up to `n` bytes from `offset` into `buf` (pread: the file position is neither used nor
+  // moved, so several threads may read disjoint ranges of one file at once); fewer only at the
+  // end of the file. The errors of read().
+  std::size_t read_at(std::size_t offset, void* buf, std::size_t n) const;
 
  private:
   std::string path_;

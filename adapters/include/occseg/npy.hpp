@@ -37,10 +37,13 @@ NpyArray parse_npy_header(const unsigned char* bytes, std::size_t size, const st
 
 // read_npy + grid_from_npy in one pass over the file: the header is read and checked (file
 // size, dims, dtype, geometry) before anything is allocated, then the samples go straight from
-// the file into the grid (float32 in C order) or into one buffer that is converted. Same errors
-// as the pair. `header` (if given) gets the header's fields; `progress`: the fraction read.
+// the file into the grid (float32 in C order), through a small piece of scratch per thread that
+// is converted into the grid (other dtypes in C order), or into one buffer that is converted
+// (Fortran order); every value is checked as it lands in the grid. Same errors as the pair.
+// `header` (if given) gets the header's fields; `progress`: the fraction read, reported from the
+// calling thread. `threads` (0: all cores, at most 8) read and check disjoint pieces at once.
 Grid read_npy_grid(const std::string& path, double voxel_size, NpyArray* header = nullptr,
-                   const IoProgress& progress = {});
+                   const IoProgress& progress = {}, int threads = 0);
 
 // Writes a C-order array atomically (write_file_atomically), or stages it `into` a set of files
 // replaced together.

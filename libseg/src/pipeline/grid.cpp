@@ -1,11 +1,15 @@
 // occseg::Grid and the checks of a map's dims and values (grid.hpp).
 #include "occseg/grid.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
 #include "occseg/error.hpp"
+#include "occseg/fill_values.hpp"
+#include "occseg/parallel.hpp"
 #include "kernels/kernels.hpp"
+#include "util/huge_pages.hpp"
 
 namespace occseg {
 
@@ -31,6 +35,18 @@ void check_dims(const Dims& d) {
 Grid::Grid(Dims d, float fill, double vs) : dims(d), voxel_size(vs) {
   check_dims(d);
   p.assign(d.count(), fill);
+}
+
+void resize_for_fill(std::vector<float>& v, std::size_t n, int threads) {
+  std::vector<float>().swap(v);
+  v.reserve(n);
+  const std::size_t bytes = n * sizeof(float);
+  advise_huge_pages(v.data(), bytes);
+  // Threads only where they pay for their start, at most 8 (clearing pages is bounded by memory
+  // bandwidth, not by cores). The storage is written before its floats exist: trivial type.
+  const int t = bytes >= (std::size_t(8) << 20) ? std::min(resolve_threads(threads), 8) : 1;
+  if (t > 1) touch_pages(v.data(), bytes, t);
+  v.resize(n);
 }
 
 bool probabilities_in_range(const float* p, std::size_t n) { return kernels::active().texture.values_in_range(p, n); }

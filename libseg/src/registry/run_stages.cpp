@@ -7,6 +7,7 @@
 
 #include "occseg/error.hpp"
 #include "occseg/parallel.hpp"
+#include "occseg/plugin_host.hpp"
 #include "occseg/registry.hpp"
 #include "registry/registry_internal.hpp"
 #include "stages/quantise.hpp"
@@ -122,6 +123,11 @@ int host_param_get_string(const occseg_plugin_call* call, const char* name, char
   }
   std::memcpy(buf, t.c_str(), t.size() + 1);
   return 0;
+}
+
+void deliver_grid(occseg_plugin_map_sink* sink, Grid&& grid) {
+  sink->grid = std::move(grid);
+  sink->filled = true;
 }
 
 int host_map_alloc(occseg_plugin_map_sink* sink, const size_t dims[3], double voxel_size, const double origin[3],
