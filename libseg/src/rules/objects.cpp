@@ -70,7 +70,21 @@ class Grouper {
   }
 
   void run() {
-    if (p_.object_gap > 0) proximity();
+    const std::size_t S = segs_.size();
+    // The states before rule 8 turns pockets unknown: rule 6's paths are through unknown voxels.
+    occ_.assign(S, 0);
+    unk_.assign(S, 0);
+    for (std::size_t s = 0; s < S; ++s) {
+      occ_[s] = state_[s] == kOccupied;
+      unk_[s] = state_[s] == kUnknown;
+    }
+    const bool near = p_.object_gap > 0 && proximity_applies();
+    if (p_.min_pocket_voxels > 0) choose_pockets();
+    // Rule 8's joins of pockets to unknown segments are made in the visit, before rules 6 and 7:
+    // they join unknown segments only, and those two rules read and join occupied groups only.
+    const bool from_unknown = near && seeds_from_unknown();
+    visit_faces(from_unknown);
+    if (near) proximity(from_unknown);
     if (p_.min_object_voxels > 0) speckles();
     if (p_.min_pocket_voxels > 0) pockets();
     if (changed_) renumber();
@@ -97,6 +111,38 @@ class Grouper {
     }
     for (std::size_t s = 0; s < segs_.size(); ++s)
       if (want[s]) for_box(static_cast<std::uint32_t>(s), fn);
+  }
+
+  // for_members() in up to kPieces pieces of the map's planes or of the segments, run on the
+  // threads: fn(out[piece], i, x, y, z), out resized to the pieces. What a piece finds never
+  // depends on the thread count.
+  static constexpr std::size_t kPieces = 64;
+  template <typename Out, typename Fn>
+  void for_members_in_pieces(const std::vector<char>& want, std::vector<Out>& out, Fn&& fn) const {
+    std::size_t boxes = 0;
+    std::vector<std::uint32_t> list;
+    for (std::size_t s = 0; s < segs_.size(); ++s)
+      if (want[s]) boxes += box_volume(segs_[s]), list.push_back(static_cast<std::uint32_t>(s));
+    const bool scan = 2 * boxes > labels_.size();
+    const std::size_t items = scan ? nz : list.size(), pieces = std::min(kPieces, items);
+    out.assign(pieces, Out());
+    parallel_for_dynamic(pieces, p_.threads, [&](std::size_t p0, std::size_t p1) {
+      for (std::size_t p = p0; p < p1; ++p) {
+        Out& o = out[p];
+        const std::size_t b = items * p / pieces, e = items * (p + 1) / pieces;
+        if (scan) {
+          for (std::size_t z = b; z < e; ++z)
+            for (std::size_t y = 0; y < ny; ++y) {
+              const std::size_t row = nx * (y + ny * z);
+              for (std::size_t x = 0; x < nx; ++x)
+                if (want[labels_[row + x]]) fn(o, row + x, x, y, z);
+            }
+        } else {
+          for (std::size_t k = b; k < e; ++k)
+            for_box(list[k], [&](std::size_t i, std::size_t x, std::size_t y, std::size_t z) { fn(o, i, x, y, z); });
+        }
+      }
+    });
   }
 
   // Calls fn(i, x, y, z) for the voxels of segment s, in scan order within its box.
@@ -130,11 +176,125 @@ class Grouper {
 
   void unite(std::uint32_t a, std::uint32_t b) { changed_ |= groups_.unite(a, b); }
 
+  // Rule 6 has something to join: two occupied segments and an unknown voxel.
+  bool proximity_applies() const {
+    std::size_t occupied = 0;
+    bool unknown = false;
+    for (std::size_t s = 0; s < segs_.size(); ++s) occupied += occ_[s], unknown = unknown || unk_[s];
+    return occupied >= 2 && unknown;
+  }
+
+  // Whether rule 6's seeds are cheaper found from the unknown voxels' faces than from the
+  // occupied ones' (the boxes, or the map, read; six faces per voxel).
+  bool seeds_from_unknown() const {
+    const std::size_t n = labels_.size();
+    std::size_t occ_boxes = 0, unk_boxes = 0;
+    std::uint64_t occ_voxels = 0, unk_voxels = 0;
+    for (std::size_t s = 0; s < segs_.size(); ++s)
+      if (occ_[s]) occ_boxes += box_volume(segs_[s]), occ_voxels += segs_[s].voxels;
+      else if (unk_[s]) unk_boxes += box_volume(segs_[s]), unk_voxels += segs_[s].voxels;
+    const auto cost = [&](std::size_t boxes, std::uint64_t voxels) {
+      return 2 * boxes > n ? n + 6 * voxels : boxes + 6 * voxels;
+    };
+    return cost(unk_boxes, unk_voxels) < cost(occ_boxes, occ_voxels);
+  }
+
+  // Rule 8's pockets: every free segment but the largest (the first of equals) with fewer than
+  // the minimum voxels; read as unknown from here on, except by rule 6.
+  void choose_pockets() {
+    pocket_min_ = minimum_size(p_.min_pocket_voxels, d_);
+    pocket_.assign(segs_.size(), 0);
+    std::size_t main = segs_.size();
+    for (std::size_t s = 0; s < segs_.size(); ++s)
+      if (state_[s] == kFree && (main == segs_.size() || segs_[s].voxels > segs_[main].voxels)) main = s;
+    for (std::size_t s = 0; s < segs_.size(); ++s)
+      if (state_[s] == kFree && s != main && segs_[s].voxels < pocket_min_) {
+        pocket_[s] = 1;
+        state_[s] = kUnknown;
+        changed_ = true;
+      }
+  }
+
+  // One visit, in id order (the order of their first voxels in the map), of the segments whose
+  // faces rules 6 and 8 read:
+  //  - rule 6 (from_unknown): the unknown segments; an unknown voxel beside occupied ones is a
+  //    seed (seeds_, kept_: the first occupied segment beside it), and joins them all;
+  //  - rule 8: a pocket joins the unknown segments (pockets included) beside it; and the faces of
+  //    every unknown segment or pocket of fewer than the minimum voxels (only those can be in a
+  //    small group) with occupied segments are counted (faces_, listed by segment in face_at_).
+  void visit_faces(bool from_unknown) {
+    const bool pockets = p_.min_pocket_voxels > 0;
+    const std::size_t S = segs_.size();
+    std::vector<char> want(S, 0);
+    bool any = false;
+    for (std::size_t s = 0; s < S; ++s) {
+      const bool small = pockets && (unk_[s] || pocket_[s]) && segs_[s].voxels < pocket_min_;
+      want[s] = (from_unknown && unk_[s]) || small || (pockets && pocket_[s]);
+      any = any || want[s];
+    }
+    if (pockets) face_at_.assign(S + 1, 0);
+    if (!any) return;
+    // In pieces on the threads; each piece's findings are taken in piece order afterwards.
+    struct Found {
+      std::vector<std::uint32_t> seeds, kept;
+      std::vector<Face> faces;
+      std::vector<std::pair<std::uint32_t, std::uint32_t>> joins;
+    };
+    std::vector<Found> found;
+    for_members_in_pieces(want, found, [&](Found& out, std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
+      const std::uint32_t s = labels_[i];
+      const bool seeds = from_unknown && unk_[s];
+      const bool count = pockets && segs_[s].voxels < pocket_min_;
+      const bool join = pockets && pocket_[s];
+      std::uint32_t a = kNone;
+      for_faces(i, x, y, z, [&](std::size_t j) {
+        const std::uint32_t l = labels_[j];
+        if (occ_[l]) {
+          if (seeds) {
+            if (a == kNone) a = l;
+            else if (l != a) out.joins.push_back({a, l});
+          }
+          if (count) {
+            if (!out.faces.empty() && out.faces.back().segment == s && out.faces.back().occupied == l) ++out.faces.back().count;
+            else out.faces.push_back({s, l, 1});
+          }
+        } else if (join && l != s && (unk_[l] || pocket_[l])) {
+          // (runs of one neighbour: one join)
+          if (out.joins.empty() || out.joins.back() != std::make_pair(s, l)) out.joins.push_back({s, l});
+        }
+      });
+      if (a != kNone) {
+        out.seeds.push_back(static_cast<std::uint32_t>(i));
+        out.kept.push_back(a);
+      }
+    });
+    std::size_t nfaces = 0;
+    for (Found& f : found) {
+      for (const auto& j : f.joins) unite(j.first, j.second);
+      f.joins = {};
+      seeds_.insert(seeds_.end(), f.seeds.begin(), f.seeds.end());
+      kept_.insert(kept_.end(), f.kept.begin(), f.kept.end());
+      f.seeds = {};
+      f.kept = {};
+      nfaces += f.faces.size();
+    }
+    if (!pockets) return;
+    // Listed by segment (a stable counting sort: a visit of the map in one pass meets them mixed).
+    for (const Found& f : found)
+      for (const Face& e : f.faces) ++face_at_[e.segment + 1];
+    for (std::size_t s = 0; s < S; ++s) face_at_[s + 1] += face_at_[s];
+    faces_.resize(nfaces);
+    std::vector<std::uint32_t> at(face_at_.begin(), face_at_.end() - 1);
+    for (const Found& f : found)
+      for (const Face& e : f.faces) faces_[at[e.segment]++] = e;
+  }
+
   // Rule 6. A path of unknown voxels lies inside one unknown segment (a 6-connected region of
   // unknown voxels), so the rule works per unknown segment U on its seeds, the voxels of U beside
   // occupied ones:
   //  1. Every seed joins the occupied segments beside it (a path of one unknown voxel). The seeds
-  //     are found from whichever side costs less: the occupied voxels' faces or the unknown ones'.
+  //     are found from whichever side costs less: the occupied voxels' faces, or the unknown
+  //     ones' (visit_faces).
   //  2. A U whose seeds all lie beside one group after that joins nothing more. A U of at most
   //     object_gap voxels joins every group beside it: any two of its voxels are linked inside it
   //     by at most that many.
@@ -149,62 +309,40 @@ class Grouper {
   //     whichever segment a tie kept and in whatever order the seeds were found.
   // The labels of seeds and reached voxels hold the kept segment during the search and get theirs
   // back after it.
-  void proximity() {
+  void proximity(bool from_unknown) {
     const std::size_t S = segs_.size(), n = labels_.size();
-    std::vector<char> occ(S, 0), unk(S, 0);
-    std::size_t occupied = 0, occ_boxes = 0, unk_boxes = 0;
-    std::uint64_t occ_voxels = 0, unk_voxels = 0;
-    for (std::size_t s = 0; s < S; ++s)
-      if (state_[s] == kOccupied) {
-        occ[s] = 1, ++occupied;
-        occ_boxes += box_volume(segs_[s]);
-        occ_voxels += segs_[s].voxels;
-      } else if (state_[s] == kUnknown) {
-        unk[s] = 1;
-        unk_boxes += box_volume(segs_[s]);
-        unk_voxels += segs_[s].voxels;
-      }
-    if (occupied < 2 || unk_voxels == 0) return;
     const int gap = p_.object_gap;
-    // d per voxel, 0: not reached. Zeroed pages come from the system as the search touches them.
-    std::unique_ptr<std::uint8_t, void (*)(void*)> dist(static_cast<std::uint8_t*>(std::calloc(n, 1)), std::free);
-    if (!dist) throw std::bad_alloc();
-    std::uint8_t* const d = dist.get();
+    // d per voxel, 0: not reached; allocated when a search needs it. Zeroed pages come from the
+    // system as the search touches them.
+    std::unique_ptr<std::uint8_t, void (*)(void*)> dist(nullptr, std::free);
+    const auto distances = [&] {
+      dist.reset(static_cast<std::uint8_t*>(std::calloc(n, 1)));
+      if (!dist) throw std::bad_alloc();
+      return dist.get();
+    };
+    std::uint8_t* d = nullptr;
     // (seed or reached voxel, its own label); the seeds first.
     std::vector<std::pair<std::uint32_t, std::uint32_t>> saved;
-    // The cost of visiting a side's voxels: its boxes (or the map) read, six faces per voxel.
-    const auto cost = [&](std::size_t boxes, std::uint64_t voxels) {
-      return 2 * boxes > n ? n + 6 * voxels : boxes + 6 * voxels;
-    };
-    if (cost(unk_boxes, unk_voxels) < cost(occ_boxes, occ_voxels)) {
-      // From the unknown voxels: the first occupied segment beside a seed is kept. Labels are
-      // rewritten after the scan, which reads them.
-      std::vector<std::uint32_t> kept;
-      for_members(unk, [&](std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
-        std::uint32_t a = kNone;
-        for_faces(i, x, y, z, [&](std::size_t j) {
-          const std::uint32_t l = labels_[j];
-          if (!occ[l]) return;
-          if (a == kNone) a = l;
-          else if (l != a) unite(a, l);
-        });
-        if (a != kNone) {
-          saved.push_back({static_cast<std::uint32_t>(i), labels_[i]});
-          kept.push_back(a);
-        }
-      });
-      for (std::size_t k = 0; k < saved.size(); ++k) labels_[saved[k].first] = kept[k];
+    if (from_unknown) {
+      saved.reserve(seeds_.size());
+      for (std::size_t k = 0; k < seeds_.size(); ++k) {
+        saved.push_back({seeds_[k], labels_[seeds_[k]]});
+        labels_[seeds_[k]] = kept_[k];
+      }
+      seeds_ = std::vector<std::uint32_t>();
+      kept_ = std::vector<std::uint32_t>();
     } else {
       // From the occupied voxels: the first segment to reach a seed is kept. (Seeds hold an
       // occupied segment's id meanwhile, so the scan must not take them for occupied voxels: d
       // says which they are.)
-      for_members(occ, [&](std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
+      d = distances();
+      for_members(occ_, [&](std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
         if (d[i]) return;
         const std::uint32_t a = labels_[i];
         for_faces(i, x, y, z, [&](std::size_t j) {
           if (d[j]) {
             if (labels_[j] != a) unite(a, labels_[j]);
-          } else if (unk[labels_[j]]) {
+          } else if (unk_[labels_[j]]) {
             d[j] = 1;
             saved.push_back({static_cast<std::uint32_t>(j), labels_[j]});
             labels_[j] = a;
@@ -228,6 +366,7 @@ class Grouper {
       if (segs_[u].voxels <= static_cast<std::uint64_t>(gap)) {
         unite(first[u], labels_[saved[k].first]);
       } else {
+        if (!d) d = distances();
         d[saved[k].first] = 1;
         next.push_back(saved[k].first);
       }
@@ -242,7 +381,7 @@ class Grouper {
         for_faces(u, [&](std::size_t j) {
           if (d[j]) {
             if (labels_[j] != a && depth + d[j] <= gap) unite(a, labels_[j]);
-          } else if (depth + 1 < gap && unk[labels_[j]]) {
+          } else if (depth + 1 < gap && unk_[labels_[j]]) {
             d[j] = static_cast<std::uint8_t>(depth + 1);
             saved.push_back({static_cast<std::uint32_t>(j), labels_[j]});
             labels_[j] = a;
@@ -303,29 +442,9 @@ class Grouper {
     for (const auto& j : joins) unite(j.first, j.second);
   }
 
-  // Rule 8.
+  // Rule 8, after choose_pockets() and visit_faces(): small unknown groups next to occupied voxels.
   void pockets() {
-    const std::uint64_t min = minimum_size(p_.min_pocket_voxels, d_);
-    // The main free space: the largest free segment (the first of equals).
-    std::size_t main = segs_.size();
-    for (std::size_t s = 0; s < segs_.size(); ++s)
-      if (state_[s] == kFree && (main == segs_.size() || segs_[s].voxels > segs_[main].voxels)) main = s;
-    std::vector<char> pocket(segs_.size(), 0);
-    for (std::size_t s = 0; s < segs_.size(); ++s)
-      if (state_[s] == kFree && s != main && segs_[s].voxels < min) {
-        pocket[s] = 1;
-        state_[s] = kUnknown;  // read as unknown from here on
-        changed_ = true;
-      }
-    for (std::size_t s = 0; s < segs_.size(); ++s) {
-      if (!pocket[s]) continue;
-      for_box(static_cast<std::uint32_t>(s), [&](std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
-        for_faces(i, x, y, z, [&](std::size_t j) {
-          const std::uint32_t l = labels_[j];
-          if (l != s && state_[l] == kUnknown) unite(static_cast<std::uint32_t>(s), l);
-        });
-      });
-    }
+    const std::uint64_t min = pocket_min_;
     // Small unknown groups next to occupied voxels. Decided for all groups before any join.
     const std::vector<std::uint64_t> size = group_sizes();
     // The members of each small group in id order, listed by root (start: offsets by root).
@@ -349,15 +468,8 @@ class Grouper {
       if (start[g] == start[g + 1]) continue;
       faces.clear();
       for (std::uint32_t m = start[g]; m < start[g + 1]; ++m)
-        for_box(member[m], [&](std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
-          for_faces(i, x, y, z, [&](std::size_t j) {
-            const std::uint32_t l = labels_[j];
-            if (state_[l] != kOccupied) return;
-            const std::uint32_t o = groups_.find(l);
-            if (!faces.empty() && faces.back().first == o) ++faces.back().second;  // (runs of one group)
-            else faces.push_back({o, 1});
-          });
-        });
+        for (std::uint32_t f = face_at_[member[m]]; f < face_at_[member[m] + 1]; ++f)
+          faces.push_back({groups_.find(faces_[f].occupied), faces_[f].count});
       if (faces.empty()) continue;
       std::sort(faces.begin(), faces.end());
       // The group of the most faces; ties: the smaller id (the first in this order).
@@ -463,6 +575,15 @@ class Grouper {
   const Params& p_;
   Groups groups_;
   std::vector<std::uint8_t> state_;  // per old id: its state (pockets read as unknown once chosen)
+  std::vector<char> occ_, unk_;      // per old id: occupied, unknown (before rule 8)
+  std::vector<char> pocket_;         // per old id: a pocket (rule 8)
+  std::uint64_t pocket_min_ = 0;
+  struct Face {
+    std::uint32_t segment, occupied, count;  // faces between an unknown segment (or pocket) and an occupied one
+  };
+  std::vector<Face> faces_;              // of the small unknown segments and pockets, by segment
+  std::vector<std::uint32_t> face_at_;   // faces_ of segment s: [face_at_[s], face_at_[s + 1])
+  std::vector<std::uint32_t> seeds_, kept_;  // rule 6's seeds found by visit_faces and their kept segment
   bool changed_ = false;
 };
 
