@@ -236,7 +236,7 @@ class Grouper {
     if (!any) return;
     // In pieces on the threads; each piece's findings are taken in piece order afterwards.
     struct Found {
-      std::vector<std::uint32_t> seeds, kept;
+      std::vector<Seed> seeds;
       std::vector<Face> faces;
       std::vector<std::pair<std::uint32_t, std::uint32_t>> joins;
     };
@@ -264,8 +264,7 @@ class Grouper {
         }
       });
       if (a != kNone) {
-        out.seeds.push_back(static_cast<std::uint32_t>(i));
-        out.kept.push_back(a);
+        out.seeds.push_back({static_cast<std::uint32_t>(i), s, a});
       }
     });
     std::size_t nfaces = 0;
@@ -273,9 +272,7 @@ class Grouper {
       for (const auto& j : f.joins) unite(j.first, j.second);
       f.joins = {};
       seeds_.insert(seeds_.end(), f.seeds.begin(), f.seeds.end());
-      kept_.insert(kept_.end(), f.kept.begin(), f.kept.end());
       f.seeds = {};
-      f.kept = {};
       nfaces += f.faces.size();
     }
     if (!pockets) return;
@@ -307,8 +304,8 @@ class Grouper {
   //     segments the search kept change only at such meetings, so A and B end up in one group:
   //     the groups are exactly the closure of "a path of at most object_gap unknown voxels",
   //     whichever segment a tie kept and in whatever order the seeds were found.
-  // The labels of seeds and reached voxels hold the kept segment during the search and get theirs
-  // back after it.
+  // The labels of the voxels searched (and, found from the occupied side, of every seed) hold the
+  // kept segment during the search and get theirs back after it.
   void proximity(bool from_unknown) {
     const std::size_t S = segs_.size(), n = labels_.size();
     const int gap = p_.object_gap;
@@ -321,17 +318,9 @@ class Grouper {
       return dist.get();
     };
     std::uint8_t* d = nullptr;
-    // (seed or reached voxel, its own label); the seeds first.
+    // (voxel whose label holds a kept segment, its own label)
     std::vector<std::pair<std::uint32_t, std::uint32_t>> saved;
-    if (from_unknown) {
-      saved.reserve(seeds_.size());
-      for (std::size_t k = 0; k < seeds_.size(); ++k) {
-        saved.push_back({seeds_[k], labels_[seeds_[k]]});
-        labels_[seeds_[k]] = kept_[k];
-      }
-      seeds_ = std::vector<std::uint32_t>();
-      kept_ = std::vector<std::uint32_t>();
-    } else {
+    if (!from_unknown) {
       // From the occupied voxels: the first segment to reach a seed is kept. (Seeds hold an
       // occupied segment's id meanwhile, so the scan must not take them for occupied voxels: d
       // says which they are.)
@@ -344,33 +333,37 @@ class Grouper {
             if (labels_[j] != a) unite(a, labels_[j]);
           } else if (unk_[labels_[j]]) {
             d[j] = 1;
+            seeds_.push_back({static_cast<std::uint32_t>(j), labels_[j], a});
             saved.push_back({static_cast<std::uint32_t>(j), labels_[j]});
             labels_[j] = a;
           }
         });
       });
     }
-    const std::size_t seeds = saved.size();
     // Step 2: per unknown segment, the group of its first seed and whether another one is beside it.
     std::vector<std::uint32_t> first(S, kNone);
     std::vector<char> several(S, 0);
-    for (std::size_t k = 0; k < seeds; ++k) {
-      const std::uint32_t u = saved[k].second, g = groups_.find(labels_[saved[k].first]);
-      if (first[u] == kNone) first[u] = g;
-      else if (first[u] != g) several[u] = 1;
+    for (const Seed& e : seeds_) {
+      const std::uint32_t g = groups_.find(e.kept);
+      if (first[e.segment] == kNone) first[e.segment] = g;
+      else if (first[e.segment] != g) several[e.segment] = 1;
     }
     std::vector<std::uint32_t> layer, next;
-    for (std::size_t k = 0; k < seeds; ++k) {
-      const std::uint32_t u = saved[k].second;
-      if (!several[u]) continue;
-      if (segs_[u].voxels <= static_cast<std::uint64_t>(gap)) {
-        unite(first[u], labels_[saved[k].first]);
+    for (const Seed& e : seeds_) {
+      if (!several[e.segment]) continue;
+      if (segs_[e.segment].voxels <= static_cast<std::uint64_t>(gap)) {
+        unite(first[e.segment], e.kept);
       } else {
         if (!d) d = distances();
-        d[saved[k].first] = 1;
-        next.push_back(saved[k].first);
+        if (from_unknown) {  // (from the occupied side the seeds' labels hold their kept segment already)
+          saved.push_back({e.voxel, e.segment});
+          labels_[e.voxel] = e.kept;
+        }
+        d[e.voxel] = 1;
+        next.push_back(e.voxel);
       }
     }
+    seeds_ = std::vector<Seed>();
     // Step 3 (the seeds of other unknown segments are never next to a voxel reached: their d, set
     // by the search from the occupied side, is never read).
     for (int depth = 1; depth < gap && !next.empty(); ++depth) {
@@ -583,7 +576,10 @@ class Grouper {
   };
   std::vector<Face> faces_;              // of the small unknown segments and pockets, by segment
   std::vector<std::uint32_t> face_at_;   // faces_ of segment s: [face_at_[s], face_at_[s + 1])
-  std::vector<std::uint32_t> seeds_, kept_;  // rule 6's seeds found by visit_faces and their kept segment
+  struct Seed {
+    std::uint32_t voxel, segment, kept;  // an unknown voxel beside occupied ones, its segment, one of those
+  };
+  std::vector<Seed> seeds_;  // rule 6's, in the order found
   bool changed_ = false;
 };
 
