@@ -17,6 +17,7 @@ namespace {
 constexpr std::uint8_t kFree = static_cast<std::uint8_t>(State::free);
 constexpr std::uint8_t kUnknown = static_cast<std::uint8_t>(State::unknown);
 constexpr std::uint8_t kOccupied = static_cast<std::uint8_t>(State::occupied);
+constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();  // no segment
 
 // Union-find over segment ids whose roots are the smallest id of their set: a group's root is
 // then its member with the first first voxel, and numbering roots in id order keeps the order of
@@ -62,22 +63,37 @@ std::size_t box_volume(const Segment& s) {
 class Grouper {
  public:
   Grouper(const Grid& g, LabelArray& labels, std::vector<Segment>& segs, const Params& p)
-      : d_(g.dims), nx(d_.nx), ny(d_.ny), nz(d_.nz), sz(nx * ny), labels_(labels), segs_(segs), p_(p),
+      : d_(g.dims), nx(d_.nx), ny(d_.ny), nz(d_.nz), sz(nx * ny), nx32_(static_cast<std::uint32_t>(nx)),
+        ny32_(static_cast<std::uint32_t>(ny)), labels_(labels), segs_(segs), p_(p),
         groups_(segs.size()), state_(segs.size()) {
     for (std::size_t s = 0; s < segs.size(); ++s) state_[s] = static_cast<std::uint8_t>(segs[s].state);
   }
 
   void run() {
-    if (p_.object_gap > 0) proximity();
+    const std::size_t S = segs_.size();
+    // The states before rule 8 turns pockets unknown: rule 6's paths are through unknown voxels.
+    occ_.assign(S, 0);
+    unk_.assign(S, 0);
+    for (std::size_t s = 0; s < S; ++s) {
+      occ_[s] = state_[s] == kOccupied;
+      unk_[s] = state_[s] == kUnknown;
+    }
+    const bool near = p_.object_gap > 0 && proximity_applies();
+    if (p_.min_pocket_voxels > 0) choose_pockets();
+    // Rule 8's joins of pockets to unknown segments are made in the visit, before rules 6 and 7:
+    // they join unknown segments only, and those two rules read and join occupied groups only.
+    const bool from_unknown = near && seeds_from_unknown();
+    visit_faces(from_unknown);
+    if (near) proximity(from_unknown);
     if (p_.min_object_voxels > 0) speckles();
     if (p_.min_pocket_voxels > 0) pockets();
     if (changed_) renumber();
   }
 
  private:
-  // Calls fn(i) for the voxels of the segments flagged in `want` (by id), in scan order within
-  // each segment's box, segment after segment in id order; in one pass over the labels instead
-  // when the boxes add up to more than half the map. Nothing is listed: on a noisy map the
+  // Calls fn(i, x, y, z) for the voxels of the segments flagged in `want` (by id), in scan order
+  // within each segment's box, segment after segment in id order; in one pass over the labels
+  // instead when the boxes add up to more than half the map. Nothing is listed: on a noisy map the
   // occupied voxels are a third of the map.
   template <typename Fn>
   void for_members(const std::vector<char>& want, Fn&& fn) const {
@@ -85,36 +101,65 @@ class Grouper {
     for (std::size_t s = 0; s < segs_.size(); ++s)
       if (want[s]) boxes += box_volume(segs_[s]);
     if (2 * boxes > labels_.size()) {
-      for (std::size_t i = 0; i < labels_.size(); ++i)
-        if (want[labels_[i]]) fn(i);
+      for (std::size_t z = 0; z < nz; ++z)
+        for (std::size_t y = 0; y < ny; ++y) {
+          const std::size_t row = nx * (y + ny * z);
+          for (std::size_t x = 0; x < nx; ++x)
+            if (want[labels_[row + x]]) fn(row + x, x, y, z);
+        }
       return;
     }
-    for (std::size_t s = 0; s < segs_.size(); ++s) {
-      if (!want[s]) continue;
-      const Segment& seg = segs_[s];
-      for (std::size_t z = seg.bbox_min[2]; z <= seg.bbox_max[2]; ++z)
-        for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1]; ++y) {
-          const std::size_t row = nx * (y + ny * z);
-          for (std::size_t x = seg.bbox_min[0]; x <= seg.bbox_max[0]; ++x)
-            if (labels_[row + x] == s) fn(row + x);
-        }
-    }
+    for (std::size_t s = 0; s < segs_.size(); ++s)
+      if (want[s]) for_box(static_cast<std::uint32_t>(s), fn);
   }
 
-  void box_members(std::uint32_t s, std::vector<std::uint32_t>& out) const {
+  // for_members() in up to kPieces pieces of the map's planes or of the segments, run on the
+  // threads: fn(out[piece], i, x, y, z), out resized to the pieces. What a piece finds never
+  // depends on the thread count.
+  static constexpr std::size_t kPieces = 64;
+  template <typename Out, typename Fn>
+  void for_members_in_pieces(const std::vector<char>& want, std::vector<Out>& out, Fn&& fn) const {
+    std::size_t boxes = 0;
+    std::vector<std::uint32_t> list;
+    for (std::size_t s = 0; s < segs_.size(); ++s)
+      if (want[s]) boxes += box_volume(segs_[s]), list.push_back(static_cast<std::uint32_t>(s));
+    const bool scan = 2 * boxes > labels_.size();
+    const std::size_t items = scan ? nz : list.size(), pieces = std::min(kPieces, items);
+    out.assign(pieces, Out());
+    parallel_for_dynamic(pieces, p_.threads, [&](std::size_t p0, std::size_t p1) {
+      for (std::size_t p = p0; p < p1; ++p) {
+        Out& o = out[p];
+        const std::size_t b = items * p / pieces, e = items * (p + 1) / pieces;
+        if (scan) {
+          for (std::size_t z = b; z < e; ++z)
+            for (std::size_t y = 0; y < ny; ++y) {
+              const std::size_t row = nx * (y + ny * z);
+              for (std::size_t x = 0; x < nx; ++x)
+                if (want[labels_[row + x]]) fn(o, row + x, x, y, z);
+            }
+        } else {
+          for (std::size_t k = b; k < e; ++k)
+            for_box(list[k], [&](std::size_t i, std::size_t x, std::size_t y, std::size_t z) { fn(o, i, x, y, z); });
+        }
+      }
+    });
+  }
+
+  // Calls fn(i, x, y, z) for the voxels of segment s, in scan order within its box.
+  template <typename Fn>
+  void for_box(std::uint32_t s, Fn&& fn) const {
     const Segment& seg = segs_[s];
     for (std::size_t z = seg.bbox_min[2]; z <= seg.bbox_max[2]; ++z)
       for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1]; ++y) {
         const std::size_t row = nx * (y + ny * z);
         for (std::size_t x = seg.bbox_min[0]; x <= seg.bbox_max[0]; ++x)
-          if (labels_[row + x] == s) out.push_back(static_cast<std::uint32_t>(row + x));
+          if (labels_[row + x] == s) fn(row + x, x, y, z);
       }
   }
 
-  // Calls fn(j) for each 6-neighbour j of voxel i inside the map.
+  // Calls fn(j) for each 6-neighbour j of voxel i = (x, y, z) inside the map.
   template <typename Fn>
-  void for_faces(std::size_t i, Fn&& fn) const {
-    const std::size_t x = i % nx, y = (i / nx) % ny, z = i / sz;
+  void for_faces(std::size_t i, std::size_t x, std::size_t y, std::size_t z, Fn&& fn) const {
     if (x > 0) fn(i - 1);
     if (x + 1 < nx) fn(i + 1);
     if (y > 0) fn(i - nx);
@@ -122,53 +167,206 @@ class Grouper {
     if (z > 0) fn(i - sz);
     if (z + 1 < nz) fn(i + sz);
   }
+  // The same from the index alone (voxel indices fit 32 bits: the labels hold them).
+  template <typename Fn>
+  void for_faces(std::size_t i, Fn&& fn) const {
+    const std::uint32_t q = static_cast<std::uint32_t>(i) / nx32_, z = q / ny32_;
+    for_faces(i, i - std::size_t(q) * nx, q - z * ny32_, z, fn);
+  }
 
   void unite(std::uint32_t a, std::uint32_t b) { changed_ |= groups_.unite(a, b); }
 
-  // Rule 6. A breadth-first search from every occupied segment into the unknown voxels, to depth
-  // object_gap - 1, keeps for each voxel reached its distance d (the unknown voxels on a shortest
-  // path from an occupied one, itself included) and one segment at that distance. Two segments
-  // are joined where the waves of two meet: at an unknown voxel next to an occupied voxel of
-  // another segment (d = 1), or at two neighbouring voxels with d(u) + d(v) <= object_gap. Every
-  // join stands for a path of at most object_gap unknown voxels; and along any such path between
-  // segments A and B the segments the search kept change only at such meetings, so A and B end
-  // up in one group: the groups are exactly the closure of "a path of at most object_gap unknown
-  // voxels", whichever segment a tie kept. The labels of reached voxels hold the kept segment
-  // during the search and get theirs back after it.
-  void proximity() {
-    std::vector<char> want(segs_.size(), 0);
+  // Rule 6 has something to join: two occupied segments and an unknown voxel.
+  bool proximity_applies() const {
     std::size_t occupied = 0;
+    bool unknown = false;
+    for (std::size_t s = 0; s < segs_.size(); ++s) occupied += occ_[s], unknown = unknown || unk_[s];
+    return occupied >= 2 && unknown;
+  }
+
+  // Whether rule 6's seeds are cheaper found from the unknown voxels' faces than from the
+  // occupied ones' (the boxes, or the map, read; six faces per voxel).
+  bool seeds_from_unknown() const {
+    const std::size_t n = labels_.size();
+    std::size_t occ_boxes = 0, unk_boxes = 0;
+    std::uint64_t occ_voxels = 0, unk_voxels = 0;
     for (std::size_t s = 0; s < segs_.size(); ++s)
-      if (state_[s] == kOccupied) want[s] = 1, ++occupied;
-    if (occupied < 2) return;
-    const int gap = p_.object_gap;
-    // d per voxel, 0: not reached. Zeroed pages come from the system as the search touches them.
-    std::unique_ptr<std::uint8_t, void (*)(void*)> dist(static_cast<std::uint8_t*>(std::calloc(labels_.size(), 1)),
-                                                        std::free);
-    if (!dist) throw std::bad_alloc();
-    std::uint8_t* const d = dist.get();
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> saved;  // (voxel, its own label)
-    std::vector<std::uint32_t> layer, next;
-    const auto reach = [&](std::size_t j, std::uint8_t depth, std::uint32_t from) {
-      d[j] = depth;
-      saved.push_back({static_cast<std::uint32_t>(j), labels_[j]});
-      labels_[j] = from;
-      next.push_back(static_cast<std::uint32_t>(j));
+      if (occ_[s]) occ_boxes += box_volume(segs_[s]), occ_voxels += segs_[s].voxels;
+      else if (unk_[s]) unk_boxes += box_volume(segs_[s]), unk_voxels += segs_[s].voxels;
+    const auto cost = [&](std::size_t boxes, std::uint64_t voxels) {
+      return 2 * boxes > n ? n + 6 * voxels : boxes + 6 * voxels;
     };
-    // (Reached voxels hold an occupied segment's id meanwhile, so the scan over the labels below
-    // must not take them for occupied voxels: d says which they are.)
-    for_members(want, [&](std::size_t i) {
-      if (d[i]) return;
-      const std::uint32_t a = labels_[i];
-      for_faces(i, [&](std::size_t j) {
-        if (d[j]) {
-          if (labels_[j] != a) unite(a, labels_[j]);
-        } else if (state_[labels_[j]] == kUnknown) {
-          reach(j, 1, a);
+    return cost(unk_boxes, unk_voxels) < cost(occ_boxes, occ_voxels);
+  }
+
+  // Rule 8's pockets: every free segment but the largest (the first of equals) with fewer than
+  // the minimum voxels; read as unknown from here on, except by rule 6.
+  void choose_pockets() {
+    pocket_min_ = minimum_size(p_.min_pocket_voxels, d_);
+    pocket_.assign(segs_.size(), 0);
+    std::size_t main = segs_.size();
+    for (std::size_t s = 0; s < segs_.size(); ++s)
+      if (state_[s] == kFree && (main == segs_.size() || segs_[s].voxels > segs_[main].voxels)) main = s;
+    for (std::size_t s = 0; s < segs_.size(); ++s)
+      if (state_[s] == kFree && s != main && segs_[s].voxels < pocket_min_) {
+        pocket_[s] = 1;
+        state_[s] = kUnknown;
+        changed_ = true;
+      }
+  }
+
+  // One visit, in id order (the order of their first voxels in the map), of the segments whose
+  // faces rules 6 and 8 read:
+  //  - rule 6 (from_unknown): the unknown segments; an unknown voxel beside occupied ones is a
+  //    seed (seeds_, kept_: the first occupied segment beside it), and joins them all;
+  //  - rule 8: a pocket joins the unknown segments (pockets included) beside it; and the faces of
+  //    every unknown segment or pocket of fewer than the minimum voxels (only those can be in a
+  //    small group) with occupied segments are counted (faces_, listed by segment in face_at_).
+  void visit_faces(bool from_unknown) {
+    const bool pockets = p_.min_pocket_voxels > 0;
+    const std::size_t S = segs_.size();
+    std::vector<char> want(S, 0);
+    bool any = false;
+    for (std::size_t s = 0; s < S; ++s) {
+      const bool small = pockets && (unk_[s] || pocket_[s]) && segs_[s].voxels < pocket_min_;
+      want[s] = (from_unknown && unk_[s]) || small || (pockets && pocket_[s]);
+      any = any || want[s];
+    }
+    if (pockets) face_at_.assign(S + 1, 0);
+    if (!any) return;
+    // In pieces on the threads; each piece's findings are taken in piece order afterwards.
+    struct Found {
+      std::vector<Seed> seeds;
+      std::vector<Face> faces;
+      std::vector<std::pair<std::uint32_t, std::uint32_t>> joins;
+    };
+    std::vector<Found> found;
+    for_members_in_pieces(want, found, [&](Found& out, std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
+      const std::uint32_t s = labels_[i];
+      const bool seeds = from_unknown && unk_[s];
+      const bool count = pockets && segs_[s].voxels < pocket_min_;
+      const bool join = pockets && pocket_[s];
+      std::uint32_t a = kNone;
+      for_faces(i, x, y, z, [&](std::size_t j) {
+        const std::uint32_t l = labels_[j];
+        if (occ_[l]) {
+          if (seeds) {
+            if (a == kNone) a = l;
+            else if (l != a) out.joins.push_back({a, l});
+          }
+          if (count) {
+            if (!out.faces.empty() && out.faces.back().segment == s && out.faces.back().occupied == l) ++out.faces.back().count;
+            else out.faces.push_back({s, l, 1});
+          }
+        } else if (join && l != s && (unk_[l] || pocket_[l])) {
+          // (runs of one neighbour: one join)
+          if (out.joins.empty() || out.joins.back() != std::make_pair(s, l)) out.joins.push_back({s, l});
         }
       });
+      if (a != kNone) {
+        out.seeds.push_back({static_cast<std::uint32_t>(i), s, a});
+      }
     });
-    for (int depth = 1; depth < gap; ++depth) {
+    std::size_t nfaces = 0;
+    for (Found& f : found) {
+      for (const auto& j : f.joins) unite(j.first, j.second);
+      f.joins = {};
+      seeds_.insert(seeds_.end(), f.seeds.begin(), f.seeds.end());
+      f.seeds = {};
+      nfaces += f.faces.size();
+    }
+    if (!pockets) return;
+    // Listed by segment (a stable counting sort: a visit of the map in one pass meets them mixed).
+    for (const Found& f : found)
+      for (const Face& e : f.faces) ++face_at_[e.segment + 1];
+    for (std::size_t s = 0; s < S; ++s) face_at_[s + 1] += face_at_[s];
+    faces_.resize(nfaces);
+    std::vector<std::uint32_t> at(face_at_.begin(), face_at_.end() - 1);
+    for (const Found& f : found)
+      for (const Face& e : f.faces) faces_[at[e.segment]++] = e;
+  }
+
+  // Rule 6. A path of unknown voxels lies inside one unknown segment (a 6-connected region of
+  // unknown voxels), so the rule works per unknown segment U on its seeds, the voxels of U beside
+  // occupied ones:
+  //  1. Every seed joins the occupied segments beside it (a path of one unknown voxel). The seeds
+  //     are found from whichever side costs less: the occupied voxels' faces, or the unknown
+  //     ones' (visit_faces).
+  //  2. A U whose seeds all lie beside one group after that joins nothing more. A U of at most
+  //     object_gap voxels joins every group beside it: any two of its voxels are linked inside it
+  //     by at most that many.
+  //  3. In the other U, a breadth-first search from the seeds to depth object_gap - 1 keeps for
+  //     each voxel reached its distance d (the unknown voxels on a shortest path from an occupied
+  //     one, itself included) and one segment at that distance. Two segments are joined where
+  //     the waves of two meet: at two neighbouring voxels with d(u) + d(v) <= object_gap (the
+  //     meetings beside occupied voxels, d = 1, are step 1's). Every join stands for a path of
+  //     at most object_gap unknown voxels; and along any such path between segments A and B the
+  //     segments the search kept change only at such meetings, so A and B end up in one group:
+  //     the groups are exactly the closure of "a path of at most object_gap unknown voxels",
+  //     whichever segment a tie kept and in whatever order the seeds were found.
+  // The labels of the voxels searched (and, found from the occupied side, of every seed) hold the
+  // kept segment during the search and get theirs back after it.
+  void proximity(bool from_unknown) {
+    const std::size_t S = segs_.size(), n = labels_.size();
+    const int gap = p_.object_gap;
+    // d per voxel, 0: not reached; allocated when a search needs it. Zeroed pages come from the
+    // system as the search touches them.
+    std::unique_ptr<std::uint8_t, void (*)(void*)> dist(nullptr, std::free);
+    const auto distances = [&] {
+      dist.reset(static_cast<std::uint8_t*>(std::calloc(n, 1)));
+      if (!dist) throw std::bad_alloc();
+      return dist.get();
+    };
+    std::uint8_t* d = nullptr;
+    // (voxel whose label holds a kept segment, its own label)
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> saved;
+    if (!from_unknown) {
+      // From the occupied voxels: the first segment to reach a seed is kept. (Seeds hold an
+      // occupied segment's id meanwhile, so the scan must not take them for occupied voxels: d
+      // says which they are.)
+      d = distances();
+      for_members(occ_, [&](std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
+        if (d[i]) return;
+        const std::uint32_t a = labels_[i];
+        for_faces(i, x, y, z, [&](std::size_t j) {
+          if (d[j]) {
+            if (labels_[j] != a) unite(a, labels_[j]);
+          } else if (unk_[labels_[j]]) {
+            d[j] = 1;
+            seeds_.push_back({static_cast<std::uint32_t>(j), labels_[j], a});
+            saved.push_back({static_cast<std::uint32_t>(j), labels_[j]});
+            labels_[j] = a;
+          }
+        });
+      });
+    }
+    // Step 2: per unknown segment, the group of its first seed and whether another one is beside it.
+    std::vector<std::uint32_t> first(S, kNone);
+    std::vector<char> several(S, 0);
+    for (const Seed& e : seeds_) {
+      const std::uint32_t g = groups_.find(e.kept);
+      if (first[e.segment] == kNone) first[e.segment] = g;
+      else if (first[e.segment] != g) several[e.segment] = 1;
+    }
+    std::vector<std::uint32_t> layer, next;
+    for (const Seed& e : seeds_) {
+      if (!several[e.segment]) continue;
+      if (segs_[e.segment].voxels <= static_cast<std::uint64_t>(gap)) {
+        unite(first[e.segment], e.kept);
+      } else {
+        if (!d) d = distances();
+        if (from_unknown) {  // (from the occupied side the seeds' labels hold their kept segment already)
+          saved.push_back({e.voxel, e.segment});
+          labels_[e.voxel] = e.kept;
+        }
+        d[e.voxel] = 1;
+        next.push_back(e.voxel);
+      }
+    }
+    seeds_ = std::vector<Seed>();
+    // Step 3 (the seeds of other unknown segments are never next to a voxel reached: their d, set
+    // by the search from the occupied side, is never read).
+    for (int depth = 1; depth < gap && !next.empty(); ++depth) {
       layer.swap(next);
       next.clear();
       for (const std::uint32_t u : layer) {
@@ -176,8 +374,11 @@ class Grouper {
         for_faces(u, [&](std::size_t j) {
           if (d[j]) {
             if (labels_[j] != a && depth + d[j] <= gap) unite(a, labels_[j]);
-          } else if (depth + 1 < gap && state_[labels_[j]] == kUnknown) {
-            reach(j, static_cast<std::uint8_t>(depth + 1), a);
+          } else if (depth + 1 < gap && unk_[labels_[j]]) {
+            d[j] = static_cast<std::uint8_t>(depth + 1);
+            saved.push_back({static_cast<std::uint32_t>(j), labels_[j]});
+            labels_[j] = a;
+            next.push_back(static_cast<std::uint32_t>(j));
           }
         });
       }
@@ -208,25 +409,24 @@ class Grouper {
       std::uint32_t to = 0;
     };
     std::vector<Best> best(segs_.size());  // at the small groups' roots
-    std::vector<std::uint32_t> vox;
     for (std::size_t s = 0; s < segs_.size(); ++s) {
       if (!want[s]) continue;
-      vox.clear();
-      box_members(static_cast<std::uint32_t>(s), vox);
       Best& b = best[groups_.find(static_cast<std::uint32_t>(s))];
-      for (const std::uint32_t i : vox) {
-        const long x = static_cast<long>(i % nx), y = static_cast<long>((i / nx) % ny), z = static_cast<long>(i / sz);
+      for_box(static_cast<std::uint32_t>(s), [&](std::size_t, std::size_t ux, std::size_t uy, std::size_t uz) {
+        const long x = static_cast<long>(ux), y = static_cast<long>(uy), z = static_cast<long>(uz);
         for (long zz = std::max(0L, z - r); zz <= std::min<long>(nz - 1, z + r); ++zz)
-          for (long yy = std::max(0L, y - r); yy <= std::min<long>(ny - 1, y + r); ++yy)
+          for (long yy = std::max(0L, y - r); yy <= std::min<long>(ny - 1, y + r); ++yy) {
+            const std::uint32_t* const row = labels_.data() + nx * (static_cast<std::size_t>(yy) + ny * static_cast<std::size_t>(zz));
             for (long xx = std::max(0L, x - r); xx <= std::min<long>(nx - 1, x + r); ++xx) {
-              const std::uint32_t l = labels_[static_cast<std::size_t>(xx) + nx * (yy + ny * zz)];
+              const std::uint32_t l = row[xx];
               if (state_[l] != kOccupied) continue;
               const std::uint32_t g = groups_.find(l);
               if (size[g] < min) continue;
               const long dd = (xx - x) * (xx - x) + (yy - y) * (yy - y) + (zz - z) * (zz - z);
               if (dd < b.dist || (dd == b.dist && g < b.to)) b.dist = dd, b.to = g;
             }
-      }
+          }
+      });
     }
     std::vector<std::pair<std::uint32_t, std::uint32_t>> joins;
     for (std::size_t s = 0; s < segs_.size(); ++s)
@@ -235,59 +435,43 @@ class Grouper {
     for (const auto& j : joins) unite(j.first, j.second);
   }
 
-  // Rule 8.
+  // Rule 8, after choose_pockets() and visit_faces(): small unknown groups next to occupied voxels.
   void pockets() {
-    const std::uint64_t min = minimum_size(p_.min_pocket_voxels, d_);
-    // The main free space: the largest free segment (the first of equals).
-    std::size_t main = segs_.size();
-    for (std::size_t s = 0; s < segs_.size(); ++s)
-      if (state_[s] == kFree && (main == segs_.size() || segs_[s].voxels > segs_[main].voxels)) main = s;
-    std::vector<char> pocket(segs_.size(), 0);
-    for (std::size_t s = 0; s < segs_.size(); ++s)
-      if (state_[s] == kFree && s != main && segs_[s].voxels < min) {
-        pocket[s] = 1;
-        state_[s] = kUnknown;  // read as unknown from here on
-        changed_ = true;
-      }
-    std::vector<std::uint32_t> vox;
-    for (std::size_t s = 0; s < segs_.size(); ++s) {
-      if (!pocket[s]) continue;
-      vox.clear();
-      box_members(static_cast<std::uint32_t>(s), vox);
-      for (const std::uint32_t i : vox)
-        for_faces(i, [&](std::size_t j) {
-          const std::uint32_t l = labels_[j];
-          if (l != s && state_[l] == kUnknown) unite(static_cast<std::uint32_t>(s), l);
-        });
-    }
+    const std::uint64_t min = pocket_min_;
     // Small unknown groups next to occupied voxels. Decided for all groups before any join.
     const std::vector<std::uint64_t> size = group_sizes();
-    std::vector<std::vector<std::uint32_t>> small(segs_.size());  // member ids at each small group's root
+    // The members of each small group in id order, listed by root (start: offsets by root).
+    std::vector<std::uint32_t> start(segs_.size() + 1, 0), member;
     for (std::size_t s = 0; s < segs_.size(); ++s) {
       const std::uint32_t g = groups_.find(static_cast<std::uint32_t>(s));
-      if (state_[s] == kUnknown && size[g] < min) small[g].push_back(static_cast<std::uint32_t>(s));
+      if (state_[s] == kUnknown && size[g] < min) ++start[g + 1];
+    }
+    for (std::size_t g = 0; g < segs_.size(); ++g) start[g + 1] += start[g];
+    member.resize(start[segs_.size()]);
+    {
+      std::vector<std::uint32_t> at(start.begin(), start.end() - 1);
+      for (std::size_t s = 0; s < segs_.size(); ++s) {
+        const std::uint32_t g = groups_.find(static_cast<std::uint32_t>(s));
+        if (state_[s] == kUnknown && size[g] < min) member[at[g]++] = static_cast<std::uint32_t>(s);
+      }
     }
     std::vector<std::pair<std::uint32_t, std::uint32_t>> joins;
     std::vector<std::pair<std::uint32_t, std::uint32_t>> faces;  // (occupied group, shared faces)
     for (std::size_t g = 0; g < segs_.size(); ++g) {
-      if (small[g].empty()) continue;
+      if (start[g] == start[g + 1]) continue;
       faces.clear();
-      for (const std::uint32_t s : small[g]) {
-        vox.clear();
-        box_members(s, vox);
-        for (const std::uint32_t i : vox)
-          for_faces(i, [&](std::size_t j) {
-            const std::uint32_t l = labels_[j];
-            if (state_[l] == kOccupied) faces.push_back({groups_.find(l), 1});
-          });
-      }
+      for (std::uint32_t m = start[g]; m < start[g + 1]; ++m)
+        for (std::uint32_t f = face_at_[member[m]]; f < face_at_[member[m] + 1]; ++f)
+          faces.push_back({groups_.find(faces_[f].occupied), faces_[f].count});
       if (faces.empty()) continue;
       std::sort(faces.begin(), faces.end());
+      // The group of the most faces; ties: the smaller id (the first in this order).
       std::uint32_t to = faces[0].first, most = 0;
       for (std::size_t a = 0; a < faces.size();) {
+        std::uint32_t count = 0;
         std::size_t b = a;
-        while (b < faces.size() && faces[b].first == faces[a].first) ++b;
-        if (b - a > most) most = static_cast<std::uint32_t>(b - a), to = faces[a].first;
+        for (; b < faces.size() && faces[b].first == faces[a].first; ++b) count += faces[b].second;
+        if (count > most) most = count, to = faces[a].first;
         a = b;
       }
       joins.push_back({static_cast<std::uint32_t>(g), to});
@@ -378,11 +562,24 @@ class Grouper {
 
   const Dims d_;
   const std::size_t nx, ny, nz, sz;
+  const std::uint32_t nx32_, ny32_;
   LabelArray& labels_;
   std::vector<Segment>& segs_;
   const Params& p_;
   Groups groups_;
   std::vector<std::uint8_t> state_;  // per old id: its state (pockets read as unknown once chosen)
+  std::vector<char> occ_, unk_;      // per old id: occupied, unknown (before rule 8)
+  std::vector<char> pocket_;         // per old id: a pocket (rule 8)
+  std::uint64_t pocket_min_ = 0;
+  struct Face {
+    std::uint32_t segment, occupied, count;  // faces between an unknown segment (or pocket) and an occupied one
+  };
+  std::vector<Face> faces_;              // of the small unknown segments and pockets, by segment
+  std::vector<std::uint32_t> face_at_;   // faces_ of segment s: [face_at_[s], face_at_[s + 1])
+  struct Seed {
+    std::uint32_t voxel, segment, kept;  // an unknown voxel beside occupied ones, its segment, one of those
+  };
+  std::vector<Seed> seeds_;  // rule 6's, in the order found
   bool changed_ = false;
 };
 

@@ -24,9 +24,10 @@ namespace occseg {
 //    becomes unknown and joins the unknown segments it touches (6-neighbours); an unknown group
 //    of fewer voxels that touches occupied voxels then joins the occupied group it shares the
 //    most faces with (ties: the smaller id).
-// A merged segment's mean occupancy, centroid and box are its members' combined in id order. One
-// thread (apart from a final relabelling pass over the map when many ids move): the result never
-// depends on `params.threads`.
+// A merged segment's mean occupancy, centroid and box are its members' combined in id order. The
+// visit of the unknown segments' and pockets' faces and the final relabelling pass run on
+// `params.threads` in fixed pieces, whose findings are taken in piece order; the groups are a
+// closure and do not depend on the order of the joins: the result never depends on the threads.
 void group_objects(const Grid& grid, LabelArray& labels, std::vector<Segment>& segments, const Params& params);
 
 // Each segment's kind from its state: free, unknown, and for occupied segments structure (when
