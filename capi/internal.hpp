@@ -110,11 +110,12 @@ inline void require(const void* p, const char* name) {
 // caller's buffer, a grid that borrows the buffer (dense float32: no copy; the pipeline checks
 // the values as it reads them) or a temporary converted copy (other dtypes and strides; with
 // the import flags, any dtype whose values need them). Bad values in a borrowed buffer fail
-// with the status and text occseg_map_from_buffer_flags gives for the same buffer.
-void with_values(const occseg_map* map, const std::function<void(const Grid&)>& fn);
+// with the status and text occseg_map_from_buffer_flags gives for the same buffer. A conversion
+// runs on at most `threads` threads (0: automatic), the caller's own limit where it has one.
+void with_values(const occseg_map* map, const std::function<void(const Grid&)>& fn, int threads = 0);
 // The map's values in a grid of its own: a copy of the map's grid, or of a viewed buffer
 // converted and checked as occseg_map_from_buffer_flags does (throws as it would).
-Grid converted(const occseg_map* map);
+Grid converted(const occseg_map* map, int threads = 0);
 
 // Runs `body`; returns 0 and clears the error on success, or the status of whatever it threw.
 template <class Body>

@@ -125,10 +125,11 @@ void convert_rows(float* out, const Dims& d, const char* base, const ptrdiff_t s
 // for occseg_map_from_buffer (the first bad voxel in x-fastest order is named). Large maps are
 // converted by several threads; when one of them meets a bad value, the rows are converted again
 // in order on this thread, which names the first one.
-void convert(float* out, const Dims& d, const char* base, int dtype, const ptrdiff_t s[3], uint32_t flags) {
+void convert(float* out, const Dims& d, const char* base, int dtype, const ptrdiff_t s[3], uint32_t flags,
+             int threads = 0) {
   auto run = [&](auto value) {
     const std::size_t rows = d.ny * d.nz;
-    const int t = d.count() >= (std::size_t(1) << 21) ? std::min(occseg::resolve_threads(0), 8) : 1;
+    const int t = d.count() >= (std::size_t(1) << 21) ? std::min(occseg::resolve_threads(threads), 8) : 1;
     std::atomic<bool> bad{false};
     if (t > 1) {
       occseg::parallel_for(rows, t, [&](std::size_t r0, std::size_t r1) {
@@ -215,7 +216,7 @@ void dims_out(const Dims& d, size_t dims[3]) {
 
 namespace occseg::capi {
 
-void with_values(const occseg_map* map, const std::function<void(const Grid&)>& fn) {
+void with_values(const occseg_map* map, const std::function<void(const Grid&)>& fn, int threads) {
   if (!map->is_view) return fn(map->grid);
   const occseg_map::View& v = map->view;
   const Grid& g = map->grid;
@@ -230,10 +231,10 @@ void with_values(const occseg_map* map, const std::function<void(const Grid&)>& 
       // below names the first one as occseg_map_from_buffer does, and throws.
     }
   }
-  fn(converted(map));
+  fn(converted(map, threads));
 }
 
-Grid converted(const occseg_map* map) {
+Grid converted(const occseg_map* map, int threads) {
   if (!map->is_view) return map->grid;
   const occseg_map::View& v = map->view;
   Grid copy;
@@ -241,7 +242,7 @@ Grid converted(const occseg_map* map) {
   copy.voxel_size = map->grid.voxel_size;
   copy.origin = map->grid.origin;
   occseg::resize_for_fill(copy.p, copy.dims.count(), 0);
-  convert(copy.p.data(), copy.dims, v.data, v.dtype, v.strides, v.flags);
+  convert(copy.p.data(), copy.dims, v.data, v.dtype, v.strides, v.flags, threads);
   return copy;
 }
 

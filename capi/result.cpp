@@ -51,7 +51,7 @@ void run_segment(occseg_result** out, occseg::Context* context, const occseg_map
   auto r = std::make_unique<occseg_result>();
   occseg::capi::with_values(map, [&](const occseg::Grid& grid) {
     r->result = context ? occseg::segment(*context, grid, p) : occseg::segment(grid, p);
-  });
+  }, p.threads);
   r->preset = occseg::preset_name(p.preset);
   r->voxel_size = map->grid.voxel_size;
   r->origin = map->grid.origin;
