@@ -18,6 +18,7 @@
 #include "occseg/parallel.hpp"
 #include "rules/objects.hpp"
 #include "rules/planes.hpp"
+#include "rules/structure.hpp"
 #include "stages/refine.hpp"
 #include "occseg/registry.hpp"
 #include "stages/texture.hpp"
@@ -238,6 +239,7 @@ Result segment_into(const Grid& grid, const Params& requested, bool keep_stages,
     if (params.support_plane > 0)
       split_support_planes(grid, r.labels, r.segments, static_cast<std::size_t>(params.support_plane),
                            params.occupied_connectivity == 26, params.threads, k);
+    split_structure(grid, r.labels, r.segments, params, k);
   }
   assign_kinds(r.segments, params, grid.dims);
   st.end();

@@ -1,0 +1,42 @@
+// Structure and objects (docs/algorithm.md, default preset rule 10): several planes per occupied
+// segment. The support-plane rule (rules/planes.hpp) splits a segment that one plane holds half of;
+// a building's floor, walls and ceiling are one connected segment that no single plane holds half
+// of, with the furniture standing on and against them. This rule finds those planes, keeps them
+// (and what lies flat on them) as one `structure` segment and splits off what stands on or
+// against them as objects. It runs after the support planes, before the kinds.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "kernels/kernels.hpp"
+#include "occseg/grid.hpp"
+#include "occseg/params.hpp"
+#include "occseg/result.hpp"
+
+namespace occseg {
+
+// For every occupied segment not already structure (rule 5) with at least 2 x support_plane
+// voxels, planes are searched one after the other (fit_dominant_plane() on the voxels no earlier
+// plane holds, at most params.structure_planes searches, stopping at the first plane of fewer than
+// support_plane voxels). A plane's inliers fall into pieces: voxels whose in-plane positions lie in
+// 8-adjacent cells of max(2, object_gap) voxels (a surface with ray gaps is one piece). A piece of
+// at least support_plane voxels spanning params.structure_extent metres along both in-plane axes is
+// structural. A segment with a structural piece becomes `structure`: the connected components
+// (occupied_connectivity) of its other voxels become objects (new segments, numbered after all
+// others in the order of their first voxel) when they have at least max(27, min_object_voxels)
+// voxels, lie flat on no structural piece (within max(3, 5 sigma) of its plane, touching it or over
+// its extent) and lie, for every structural piece they touch, on a side of it that sees free space
+// and rise max(3, 5 sigma) above it; everything else stays in the structure segment.
+//
+// Then occupied segments of fewer than max(27, min_object_voxels) voxels whose every voxel lies
+// within one voxel edge of a piece of at least support_plane voxels found above, inside its in-plane
+// extent widened by object_gap + 1, join that piece's segment (the first such piece in segment and
+// search order): a table top seen edge-on by a planar scanner is one surface in many pieces. Ids
+// stay dense (the joined ones removed, the order of the others kept).
+//
+// Statistics of changed segments are recomputed (in scan order, or combined for joins as in
+// rules/objects.hpp). One thread: results never depend on params.threads or the kernels `k`.
+void split_structure(const Grid& grid, LabelArray& labels, std::vector<Segment>& segments, const Params& params,
+                     const kernels::Table& k = kernels::active());
+
+}  // namespace occseg
