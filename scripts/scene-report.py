@@ -61,7 +61,7 @@ def table_columns(segments):
 
 
 def segment(tool, path, extra, out):
-    run([tool, "segment", path, "--out", out, "--quiet"] + extra)
+    run([tool, "segment", path, "--out", out, "--quiet", "--outputs", "labels.npy,segments.json"] + extra)
     with open(os.path.join(out, "segments.json")) as f:
         return json.load(f)["segments"]
 

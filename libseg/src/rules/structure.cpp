@@ -6,8 +6,6 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
-#include <cstdio>
-#include <cstdlib>
 
 #include "occseg/parallel.hpp"
 #include "rules/objects.hpp"
@@ -18,6 +16,9 @@ namespace occseg {
 namespace {
 
 using Vec = std::array<double, 3>;
+
+// A structural piece sags by less than this (voxel edges) across its extent (examine()).
+constexpr double kMaxSag = 0.5;
 
 Vec cross(const Vec& a, const Vec& b) {
   return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
@@ -172,8 +173,12 @@ class Structure {
 
   // The pieces of one plane's inliers (indices into members_): cells of cell_ x cell_ voxels in
   // the plane's (u, v) coordinates, 8-adjacent cells joined. Returns the piece of each inlier.
+  // `inner` receives, per piece, its cells whose four in-plane neighbours are cells of it too: an
+  // area (a floor, a wall) has many, a curve (the cross-section of a curved shell, a ring on a
+  // cone) almost none.
   std::vector<std::uint32_t> plane_pieces(const std::vector<std::uint32_t>& inl, const Vec& u, const Vec& v,
-                                          std::size_t& count) const {
+                                          std::size_t& count, std::vector<std::size_t>& cells_of,
+                                          std::vector<std::size_t>& inner) const {
     std::vector<std::pair<std::int64_t, std::int64_t>> cell(inl.size());
     for (std::size_t i = 0; i < inl.size(); ++i) {
       const Vec& q = pts_[inl[i]];
@@ -207,6 +212,17 @@ class Structure {
     for (std::size_t c = 0; c < cells.size(); ++c) {
       const std::uint32_t r = find(static_cast<std::uint32_t>(c));
       if (number[r] == ~0u) number[r] = static_cast<std::uint32_t>(count++);
+    }
+    cells_of.assign(count, 0);
+    inner.assign(count, 0);
+    const auto has = [&](std::int64_t a, std::int64_t b) {
+      return std::binary_search(cells.begin(), cells.end(), std::pair<std::int64_t, std::int64_t>{a, b});
+    };
+    for (std::size_t c = 0; c < cells.size(); ++c) {
+      const std::uint32_t k = number[find(static_cast<std::uint32_t>(c))];
+      ++cells_of[k];
+      const auto [a, b] = cells[c];
+      inner[k] += has(a - 1, b) && has(a + 1, b) && has(a, b - 1) && has(a, b + 1);
     }
     std::vector<std::uint32_t> piece(inl.size());
     for (std::size_t i = 0; i < inl.size(); ++i) {
@@ -299,31 +315,89 @@ class Structure {
       Vec u, v;
       plane_basis(pl.n, u, v);
       std::size_t pieces = 0;
-      const std::vector<std::uint32_t> piece = plane_pieces(inl, u, v, pieces);
+      std::vector<std::size_t> cells_of, inner;
+      const std::vector<std::uint32_t> piece = plane_pieces(inl, u, v, pieces, cells_of, inner);
+      // Each piece's extent along its own principal axes in the plane (a diagonal strip is narrow,
+      // whatever the plane's basis).
       std::vector<Piece> found(pieces);
+      std::vector<std::array<double, 5>> mom(pieces, {0, 0, 0, 0, 0});  // sums of a, b, aa, ab, bb
       for (std::size_t i = 0; i < inl.size(); ++i) {
         Piece& pc = found[piece[i]];
         const Vec& q = pts_[inl[i]];
         const double a = dot(q, u), b = dot(q, v);
-        if (pc.voxels == 0) pc.u0 = pc.u1 = a, pc.v0 = pc.v1 = b, pc.lo = pc.hi = {std::uint32_t(q[0]), std::uint32_t(q[1]), std::uint32_t(q[2])};
-        pc.u0 = std::min(pc.u0, a), pc.u1 = std::max(pc.u1, a), pc.v0 = std::min(pc.v0, b), pc.v1 = std::max(pc.v1, b);
+        std::array<double, 5>& m = mom[piece[i]];
+        m[0] += a, m[1] += b, m[2] += a * a, m[3] += a * b, m[4] += b * b;
+        if (pc.voxels == 0) pc.lo = pc.hi = {std::uint32_t(q[0]), std::uint32_t(q[1]), std::uint32_t(q[2])};
         for (int k = 0; k < 3; ++k)
           pc.lo[k] = std::min(pc.lo[k], std::uint32_t(q[k])), pc.hi[k] = std::max(pc.hi[k], std::uint32_t(q[k]));
         ++pc.voxels;
       }
-      if (std::getenv("OCCSEG_STRUCT_DEBUG")) {
-        std::size_t big = 0, st = 0;
-        for (const Piece& pc : found) if (pc.voxels >= min_plane_) { ++big; if (pc.u1 - pc.u0 + 1 >= extent_ && pc.v1 - pc.v0 + 1 >= extent_) st += pc.voxels; }
-        std::fprintf(stderr, "seg %u axis %d it %d n=(%.3f %.3f %.3f) d=%.1f inl=%zu pieces=%zu big=%zu extent-ok voxels=%zu rest=%zu\n", s, axis, it, pl.n[0], pl.n[1], pl.n[2], pl.d, inl.size(), pieces, big, st, rest.size());
+      for (std::size_t q = 0; q < pieces; ++q) {
+        Piece& pc = found[q];
+        const std::array<double, 5>& m = mom[q];
+        const double k = double(pc.voxels), ma = m[0] / k, mb = m[1] / k;
+        const double caa = m[2] / k - ma * ma, cab = m[3] / k - ma * mb, cbb = m[4] / k - mb * mb;
+        const double th = 0.5 * std::atan2(2 * cab, caa - cbb), c = std::cos(th), sn = std::sin(th);
+        for (int j = 0; j < 3; ++j) pc.u[j] = c * u[j] + sn * v[j], pc.v[j] = -sn * u[j] + c * v[j];
+        pc.u0 = pc.v0 = std::numeric_limits<double>::infinity();
+        pc.u1 = pc.v1 = -pc.u0;
       }
+      for (std::size_t i = 0; i < inl.size(); ++i) {
+        Piece& pc = found[piece[i]];
+        const Vec& q = pts_[inl[i]];
+        const double a = dot(q, pc.u), b = dot(q, pc.v);
+        pc.u0 = std::min(pc.u0, a), pc.u1 = std::max(pc.u1, a), pc.v0 = std::min(pc.v0, b), pc.v1 = std::max(pc.v1, b);
+      }
+      std::vector<char> curved(pieces, 0);
       std::vector<std::int32_t> index(pieces, -1);
       for (std::size_t q = 0; q < pieces; ++q) {
         Piece& pc = found[q];
         if (pc.voxels < min_plane_) continue;
-        pc.segment = s, pc.pl = pl, pc.u = u, pc.v = v;
-        pc.structural = pc.u1 - pc.u0 + 1 >= extent_ && pc.v1 - pc.v0 + 1 >= extent_;
+        pc.segment = s, pc.pl = pl;
+        // Structural: wide both ways, an area (at least a quarter of its cells inner ones), and flat.
+        pc.structural = pc.u1 - pc.u0 + 1 >= extent_ && pc.v1 - pc.v0 + 1 >= extent_ && 4 * inner[q] >= cells_of[q];
+        if (pc.structural) curved[q] = 1;  // decided below
         index[q] = static_cast<std::int32_t>(local.size());
         local.push_back(pc);
+      }
+      // Flatness: the least-squares fit d = c0 + c1 a^2 + c2 b^2 of the signed distances over each
+      // candidate piece (a, b centred on its principal axes) sags by under kMaxSag voxel edges
+      // across it. A gently curved shell (a cone's side under range noise) lies within the
+      // inlier band over a wide patch, but its centre and its edges sit on opposite sides.
+      std::vector<std::array<double, 9>> ls(pieces);  // sums: 1, A, B, AA, AB, BB, d, dA, dB
+      for (std::size_t q = 0; q < pieces; ++q) ls[q].fill(0);
+      for (std::size_t i = 0; i < inl.size(); ++i) {
+        const std::size_t q = piece[i];
+        if (!curved[q]) continue;
+        const Piece& pc = found[q];
+        const Vec& x = pts_[inl[i]];
+        const double a = dot(x, pc.u) - 0.5 * (pc.u0 + pc.u1), b = dot(x, pc.v) - 0.5 * (pc.v0 + pc.v1);
+        const double A = a * a, B = b * b, e = pl.distance(x[0], x[1], x[2]);
+        std::array<double, 9>& t = ls[q];
+        t[0] += 1, t[1] += A, t[2] += B, t[3] += A * A, t[4] += A * B, t[5] += B * B, t[6] += e, t[7] += e * A,
+            t[8] += e * B;
+      }
+      for (std::size_t q = 0; q < pieces; ++q) {
+        if (!curved[q]) continue;
+        const std::array<double, 9>& t = ls[q];
+        const double m[3][3] = {{t[0], t[1], t[2]}, {t[1], t[3], t[4]}, {t[2], t[4], t[5]}};
+        const double r[3] = {t[6], t[7], t[8]};
+        const auto det3 = [](const double a[3][3]) {
+          return a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+                 a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+        };
+        const double det = det3(m);
+        double c[3] = {0, 0, 0};
+        if (std::fabs(det) > 0)
+          for (int j = 0; j < 3; ++j) {
+            double mj[3][3];
+            for (int r0 = 0; r0 < 3; ++r0)
+              for (int c0 = 0; c0 < 3; ++c0) mj[r0][c0] = c0 == j ? r[r0] : m[r0][c0];
+            c[j] = det3(mj) / det;
+          }
+        const double hu = 0.5 * (found[q].u1 - found[q].u0), hv = 0.5 * (found[q].v1 - found[q].v0);
+        const double sag = std::max(std::fabs(c[1]) * hu * hu, std::fabs(c[2]) * hv * hv);
+        if (index[q] >= 0) local[std::size_t(index[q])].structural = sag < kMaxSag;
       }
       for (std::size_t i = 0; i < inl.size(); ++i) {
         const std::int32_t q = index[piece[i]];
@@ -331,8 +405,10 @@ class Structure {
       }
       }
     }
-    // Voxels a plane search left out (a cross-section's, a later plane's overlap) that lie on a
-    // structural piece's plane, over its extent, belong to it.
+    // Voxels the plane searches left out (those of no orientation: where a wall meets the floor,
+    // under a box standing on it; a cross-section's) that lie on a structural piece's plane, over
+    // its extent widened by a cell, belong to it.
+    const double w = cell_;
     for (std::size_t m = 0; m < n; ++m) {
       if (piece_of[m] >= 0) continue;
       const Vec& q = pts_[m];
@@ -340,7 +416,7 @@ class Structure {
         const Piece& pc = local[p];
         if (!pc.structural || std::fabs(pc.pl.distance(q[0], q[1], q[2])) > kPlaneInlierDistance) continue;
         const double a = dot(q, pc.u), b = dot(q, pc.v);
-        if (a < pc.u0 || a > pc.u1 || b < pc.v0 || b > pc.v1) continue;
+        if (a < pc.u0 - w || a > pc.u1 + w || b < pc.v0 - w || b > pc.v1 + w) continue;
         piece_of[m] = static_cast<std::int32_t>(p);
         break;
       }

@@ -3,7 +3,8 @@
 // a building's floor, walls and ceiling are one connected segment that no single plane holds half
 // of, with the furniture standing on and against them. This rule finds those planes, keeps them
 // (and what lies flat on them) as one `structure` segment and splits off what stands on or
-// against them as objects. It runs after the support planes, before the kinds.
+// against them as objects. It runs before the support planes (which skip the segments it made
+// structure) and the kinds.
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -15,7 +16,7 @@
 
 namespace occseg {
 
-// For every occupied segment not already structure (rule 5) with at least 2 x support_plane
+// For every occupied segment with at least 2 x support_plane
 // voxels, planes are searched one after the other (fit_dominant_plane() on the voxels no earlier
 // plane holds, at most params.structure_planes searches, stopping at the first plane of fewer than
 // support_plane voxels). A plane's inliers fall into pieces: voxels whose in-plane positions lie in
