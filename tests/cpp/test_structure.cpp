@@ -215,3 +215,17 @@ TEST(Structure, ParametersByName) {
   EXPECT_THROW(q.validate(), Error);
   EXPECT_EQ(Params::paper().structure_planes, 0);
 }
+
+TEST(Structure, ResultsIdenticalForAnyThreadCount) {
+  std::vector<LabelArray> labels;
+  for (int threads : {1, 2, 3}) {
+    Scene s({50, 30, 30}, 0.04, table_edge_on);
+    Params p = structure_only();
+    p.support_plane = 64;
+    p.threads = threads;
+    s.run(p);
+    labels.push_back(s.labels);
+  }
+  EXPECT_EQ(labels[0], labels[1]);
+  EXPECT_EQ(labels[0], labels[2]);
+}
