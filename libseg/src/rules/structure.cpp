@@ -19,6 +19,9 @@ using Vec = std::array<double, 3>;
 
 // A structural piece sags by less than this (voxel edges) across its extent (examine()).
 constexpr double kMaxSag = 0.5;
+// A segment is examined when at least this share (per cent) of a sample of its voxels is thin
+// along some axis (examine()).
+constexpr std::size_t kMinSurfacePercent = 50;
 
 Vec cross(const Vec& a, const Vec& b) {
   return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
@@ -286,8 +289,24 @@ class Structure {
     // The planes are searched among the voxels of one orientation at a time (z: floors, ceilings,
     // table tops first; then y, then x): a plane within 45 degrees of an axis is found among that
     // axis' voxels.
-    std::vector<std::uint8_t> axes(n, 0);
     const int thin = std::max(4, p_.object_gap + 2);
+    // A segment whose voxels are mostly thick along every axis (a sprawling region of noise) holds
+    // no surfaces: judged on an evenly strided sample of at most 4096 of its voxels before any
+    // work per voxel.
+    {
+      const std::size_t k = std::min<std::size_t>(n, 4096);
+      std::size_t surface = 0;
+      for (std::size_t i = 0; i < k; ++i) {
+        const Vec& q = pts_[i * n / k];
+        for (int a = 0; a < 3; ++a)
+          if (thickness(s, q, a, thin + 1) <= thin) {
+            ++surface;
+            break;
+          }
+      }
+      if (100 * surface < kMinSurfacePercent * k) return;
+    }
+    std::vector<std::uint8_t> axes(n, 0);
     for (std::size_t m = 0; m < n; ++m)
       for (int a = 0; a < 3; ++a)
         if (thickness(s, pts_[m], a, thin + 1) <= thin) axes[m] |= std::uint8_t(1u << a);
