@@ -668,7 +668,8 @@ class Structure {
 
 void split_structure(const Grid& grid, LabelArray& labels, std::vector<Segment>& segments, const Params& params,
                      const kernels::Table& k) {
-  if (params.structure_planes <= 0 || params.support_plane <= 0 || segments.empty()) return;
+  // (A one-layer map's walls are lines and its one layer the only "plane": nothing to find.)
+  if (params.structure_planes <= 0 || params.support_plane <= 0 || segments.empty() || grid.dims.nz == 1) return;
   Structure(grid, labels, segments, params, k).run();
 }
 

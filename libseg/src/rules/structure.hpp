@@ -35,7 +35,7 @@ namespace occseg {
 // search order): a table top seen edge-on by a planar scanner is one surface in many pieces. Ids
 // stay dense (the joined ones removed, the order of the others kept).
 //
-// Statistics of changed segments are recomputed (in scan order, or combined for joins as in
+// Nothing is done on a one-layer map (nz = 1). Statistics of changed segments are recomputed (in scan order, or combined for joins as in
 // rules/objects.hpp). One thread: results never depend on params.threads or the kernels `k`.
 void split_structure(const Grid& grid, LabelArray& labels, std::vector<Segment>& segments, const Params& params,
                      const kernels::Table& k = kernels::active());
