@@ -3,10 +3,12 @@
 simulated scenes: the columns of docs/experiments.md, "Objects, speckles, pockets".
 
 usage: scripts/scene-report.py [--build build] [--work DIR] [--real-only | --sim-only] [--sim-dims NX NY NZ]
+                               [--before NAME=VALUE,...]
 
 "before" is the default preset with the three rules off (object_gap=0, min_object_voxels=0,
 min_pocket_voxels=0: the labels of the default preset before the rules); "after" is the default
-preset as it is. Real files are read from ../shared/data/ (relative to the repository root)."""
+preset as it is. `--before structure_planes=0` compares with the default preset without rule 10
+instead (docs/experiments.md, "Structure and objects"). Real files are read from ../shared/data/ (relative to the repository root)."""
 import argparse
 import json
 import os
@@ -59,17 +61,17 @@ def table_columns(segments):
 
 
 def segment(tool, path, extra, out):
-    run([tool, "segment", path, "--out", out, "--quiet"] + extra)
+    run([tool, "segment", path, "--out", out, "--quiet", "--outputs", "labels.npy,segments.json"] + extra)
     with open(os.path.join(out, "segments.json")) as f:
         return json.load(f)["segments"]
 
 
-def real(tool, work):
+def real(tool, work, before=OFF):
     print("| input | run | segments | occupied | occupied of <= 8 voxels | occupied segments holding 99 % "
           "| free/unknown of <= 8 voxels | structure / object / clutter | structure + object cover | clutter share |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     for name, f, extra in REAL:
-        for label, params in (("before", OFF), ("after", [])):
+        for label, params in (("before", before), ("after", [])):
             c = table_columns(segment(tool, os.path.join(DATA, f), extra + params, os.path.join(work, "real")))
             print("| %s | %s | %d | %d | %d | %d | %d | %d / %d / %d | %.1f %% | %.2f %% |" % (
                 name, label, c["segments"], c["occupied"], c["occ<=8"], c["occ99"], c["fu<=8"], c["structure"],
@@ -86,7 +88,7 @@ def score(tool, truth, labels=None, segments=None, method=None):
     return json.loads(run(cmd))["results"][0]["scores"]
 
 
-def simulated(tool, work, dims):
+def simulated(tool, work, dims, before=OFF):
     print("| scene | method | segments | occupied segments per object | spanning | object voxels labelled free "
           "| IoU free / unknown / occupied | structure / object / clutter | free/unknown of <= 8 voxels |")
     print("|---|---|---|---|---|---|---|---|---|")
@@ -94,7 +96,7 @@ def simulated(tool, work, dims):
         truth = os.path.join(work, "sim-" + scene)
         run([tool, "simulate", "--scene", scene, "--out", truth] + (["--dims"] + dims if dims else []))
         rows = []
-        for label, params in (("before", OFF), ("after", [])):
+        for label, params in (("before", before), ("after", [])):
             out = os.path.join(work, "seg-" + scene + "-" + label)
             segs = segment(tool, os.path.join(truth, "map.npy"), ["--voxel-size", "0.04"] + params, out)
             s = score(tool, truth, os.path.join(out, "labels.npy"), os.path.join(out, "segments.json"))
@@ -117,16 +119,22 @@ def main():
     ap.add_argument("--real-only", action="store_true")
     ap.add_argument("--sim-only", action="store_true")
     ap.add_argument("--sim-dims", nargs=3)
+    ap.add_argument("--before", help="parameters of the 'before' run, NAME=VALUE,... (default: the object rules off)")
     a = ap.parse_args()
+    before = OFF
+    if a.before:
+        before = []
+        for kv in a.before.split(","):
+            before += ["--param", kv]
     tool = os.path.join(a.build, "tools", "occseg")
     with tempfile.TemporaryDirectory() as tmp:
         work = a.work or tmp
         os.makedirs(work, exist_ok=True)
         if not a.sim_only:
-            real(tool, work)
+            real(tool, work, before)
             print()
         if not a.real_only:
-            simulated(tool, work, a.sim_dims)
+            simulated(tool, work, a.sim_dims, before)
 
 
 if __name__ == "__main__":

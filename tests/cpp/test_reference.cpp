@@ -29,11 +29,12 @@ using occseg::testing_isa::for_each_isa;
 static_assert(reference::kSlab == kLabelSlab);
 
 // The reference ends at the labelling; the object rules that follow it in the default preset
-// (rules/objects.hpp) are tested on their own (test_objects.cpp), so whole runs are compared with
-// them off.
+// (rules/objects.hpp, rules/structure.hpp) are tested on their own (test_objects.cpp,
+// test_structure.cpp), so whole runs are compared with them off.
 static Params labelled_defaults() {
   Params p = Params::defaults();
   p.object_gap = p.min_object_voxels = p.min_pocket_voxels = 0;
+  p.structure_planes = 0;
   return p;
 }
 

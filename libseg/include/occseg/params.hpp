@@ -46,6 +46,14 @@ struct Params {
   int object_gap = 4;
   int min_object_voxels = 64;
   int min_pocket_voxels = 64;
+  // default preset only (rules/structure.hpp; 0: off, as in the paper preset): up to
+  // structure_planes planes are searched in each occupied segment that no single support plane
+  // holds half of; a plane whose voxels (at least support_plane of them) span structure_extent
+  // metres both ways is structure (a floor, a wall, a ceiling), and what stands on or against it
+  // is split off as objects. Small occupied groups lying in a plane of a larger segment, inside
+  // its extent, join it (a table top seen edge-on in pieces).
+  int structure_planes = 32;
+  double structure_extent = 2.0;
   int threads = 0;             // 0: all cores. Results never depend on it.
   // Texture operator, by name (occseg/registry.hpp). "auto" (both presets): lbp8, the authors'
   // 2D operator, on a one-layer map (nz = 1), lbp6 on any other (resolved_texture).

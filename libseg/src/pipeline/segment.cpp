@@ -18,6 +18,7 @@
 #include "occseg/parallel.hpp"
 #include "rules/objects.hpp"
 #include "rules/planes.hpp"
+#include "rules/structure.hpp"
 #include "stages/refine.hpp"
 #include "occseg/registry.hpp"
 #include "stages/texture.hpp"
@@ -235,6 +236,9 @@ Result segment_into(const Grid& grid, const Params& requested, bool keep_stages,
   // Part of "labelling" for callers: they decide which regions are objects.
   if (params.preset == Preset::default_preset) {
     group_objects(grid, r.labels, r.segments, params);
+    // Rule 10 before rule 5: a segment it makes structure (several planes) is not split again at
+    // its largest plane alone (which would cut the walls off a floor as objects standing on it).
+    split_structure(grid, r.labels, r.segments, params, k);
     if (params.support_plane > 0)
       split_support_planes(grid, r.labels, r.segments, static_cast<std::size_t>(params.support_plane),
                            params.occupied_connectivity == 26, params.threads, k);

@@ -165,7 +165,7 @@ void for_sample(std::size_t n, F&& f) {
 // the result never depends on the thread count. A batch past the adaptive stop is wasted work,
 // not a different result.
 bool sample_plane(const std::vector<Vec>& sample, std::uint64_t seed, Plane& best, int threads,
-                  const kernels::PlanesKernels& k) {
+                  const kernels::PlanesKernels& k, int axis = -1) {
   if (sample.size() < 3) return false;
   Rng rng{seed};
   // At most 256 draws of 3 points: a plane holding half the points is drawn with probability
@@ -184,6 +184,9 @@ bool sample_plane(const std::vector<Vec>& sample, std::uint64_t seed, Plane& bes
     const Vec nrm = cross(sub(b, a), sub(c, a));
     const double len = std::sqrt(dot(nrm, nrm));
     if (len < 1e-9) continue;
+    // (With an axis, only planes whose normal lies within 45 degrees of it are drawn; the
+    // generator's sequence is the same either way.)
+    if (axis >= 0 && std::fabs(nrm[static_cast<std::size_t>(axis)]) < std::sqrt(0.5) * len) continue;
     dr.valid = true;
     dr.h.n = {nrm[0] / len, nrm[1] / len, nrm[2] / len};
     dr.h.d = dot(dr.h.n, a);
@@ -257,11 +260,11 @@ void detail::msac_cost_pair(const std::vector<Vec>& points, const Plane& a, cons
 }
 
 bool fit_dominant_plane(const std::vector<Vec>& points, std::uint64_t seed, Plane& plane, std::size_t& inliers,
-                        int threads, const kernels::Table& k) {
+                        int threads, const kernels::Table& k, int axis) {
   inliers = 0;
   std::vector<Vec> sample;
   for_sample(points.size(), [&](std::size_t i) { sample.push_back(points[i]); });
-  if (!sample_plane(sample, seed, plane, threads, k.planes)) return false;
+  if (!sample_plane(sample, seed, plane, threads, k.planes, axis)) return false;
   inliers = refine_plane(points, plane);
   return true;
 }
@@ -643,6 +646,7 @@ void split_support_planes(const Grid& grid, LabelArray& labels, std::vector<Segm
   for (std::size_t s = 0; s < original; ++s) {
     const Segment& seg = segments[s];
     if (seg.state != State::occupied || seg.voxels < min_plane + kMinObjectVoxels) continue;
+    if (seg.kind == Kind::structure) continue;  // rule 10's: its planes and objects are found
     // Temporary labels count down from the top of the id range; they must stay above every id.
     if (original + 2 * seg.voxels + 2 >= std::numeric_limits<std::uint32_t>::max()) continue;
     candidates.push_back(static_cast<std::uint32_t>(s));

@@ -37,11 +37,15 @@ struct Plane {
 // refined by least-squares fits to the inliers. `inliers` receives how many of all points are
 // within kPlaneInlierDistance of the result. Returns false for fewer than 3 points or when all
 // are collinear. Candidate planes are scored on up to `threads` threads (0: all cores) with the
-// kernels `k`; the result never depends on the thread count or the kernels.
+// kernels `k`; the result never depends on the thread count or the kernels. With `axis` 0, 1 or 2
+// only planes whose drawn normal lies within 45 degrees of that axis are candidates (the refits may
+// tilt it further); -1: any.
 bool fit_dominant_plane(const std::vector<std::array<double, 3>>& points, std::uint64_t seed, Plane& plane,
-                        std::size_t& inliers, int threads = 1, const kernels::Table& k = kernels::active());
+                        std::size_t& inliers, int threads = 1, const kernels::Table& k = kernels::active(),
+                        int axis = -1);
 
-// Splits every occupied segment with at least `min_plane` voxels whose dominant plane holds at
+// Splits every occupied segment (not already `structure`: rule 10, rules/structure.hpp, split it
+// at several planes) with at least `min_plane` voxels whose dominant plane holds at
 // least `min_plane` of them and at least half of them. Pieces of the rest (connected as
 // `occupied26` says) that lie on the plane's open side (the side its voxels see free space on),
 // have at least kMinObjectVoxels voxels and rise at least max(kMinObjectHeight, kNoiseHeights x

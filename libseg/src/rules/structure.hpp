@@ -1,0 +1,51 @@
+// Structure and objects (docs/algorithm.md, default preset rule 10): several planes per occupied
+// segment. The support-plane rule (rules/planes.hpp) splits a segment that one plane holds half of;
+// a building's floor, walls and ceiling are one connected segment that no single plane holds half
+// of, with the furniture standing on and against them. This rule finds those planes, keeps them
+// (and what lies flat on them) as one `structure` segment and splits off what stands on or
+// against them as objects. It runs before the support planes (which skip the segments it made
+// structure) and the kinds.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "kernels/kernels.hpp"
+#include "occseg/grid.hpp"
+#include "occseg/params.hpp"
+#include "occseg/result.hpp"
+
+namespace occseg {
+
+// For every occupied segment with at least 2 x support_plane voxels, at least half of a 4096-voxel
+// sample of which is thin along some axis (at most max(4, object_gap + 2) voxels through it,
+// crossing gaps of at most object_gap): for z, then y, then x, planes with normals within 45
+// degrees of the axis are searched among the voxels thin along it that no earlier plane holds
+// (fit_dominant_plane(..., axis); at most params.structure_planes searches per axis, stopping at
+// the first plane of fewer than support_plane voxels). A plane's inliers fall into pieces: cells
+// of max(2, object_gap) voxels in the plane's coordinates, 8-adjacent cells joined (a surface with
+// ray gaps is one piece). A piece is structural when it has at least support_plane voxels, spans
+// params.structure_extent metres along both of its principal axes, is an area (a quarter of its
+// cells have all four in-plane neighbours) and is flat (a quadratic fit of its distances sags by
+// under half a voxel edge). Unclaimed voxels on a structural piece's plane over its extent
+// (widened by a cell) join it. A segment with a structural piece becomes `structure`: the
+// connected components (occupied_connectivity) of its other voxels become objects (new segments,
+// numbered after all others in the order of their first voxel) when they have at least
+// max(27, min_object_voxels) voxels, touch a structural piece, lie flat on none (within
+// max(3, 5 sigma) of its plane, touching it or over its extent) and lie, for every structural
+// piece they touch, on a side of it that sees free space and rise max(3, 5 sigma) above it;
+// everything else stays in the structure segment.
+//
+// Then occupied segments of fewer than max(27, min_object_voxels) (and 2 x support_plane) voxels
+// whose every voxel lies within one voxel edge of a piece of at least support_plane voxels found
+// above (structural, or of a segment left whole), inside its extent widened by object_gap + 1,
+// join that piece's segment (the first such piece in segment and search order): a table top seen
+// edge-on by a planar scanner is one surface in many pieces. Ids stay dense (the joined ones
+// removed, the order of the others kept).
+//
+// Nothing is done on a one-layer map (nz = 1). Statistics of changed segments are recomputed (in
+// scan order, or combined for joins as in rules/objects.hpp). One thread (the final relabelling
+// pass on params.threads): results never depend on params.threads or the kernels `k`.
+void split_structure(const Grid& grid, LabelArray& labels, std::vector<Segment>& segments, const Params& params,
+                     const kernels::Table& k = kernels::active());
+
+}  // namespace occseg
