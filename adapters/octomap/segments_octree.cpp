@@ -67,6 +67,20 @@ class DirectTree {
     floor_ = octomap::logodds(0.7);
     occupied_.resize(r.segments.size());
     for (std::size_t i = 0; i < r.segments.size(); ++i) occupied_[i] = r.segments[i].state == State::occupied;
+    // Which cubes of 8 x 8 x 8 keys hold an occupied voxel: the others are skipped whole.
+    for (int k = 0; k < 3; ++k) {
+      b0_[k] = first_[k] >> 3;
+      bn_[k] = ((first_[k] + n_[k] - 1) >> 3) - b0_[k] + 1;
+    }
+    blocks_.assign(std::size_t(bn_[0] * bn_[1] * bn_[2]), 0);
+    std::size_t i = 0;
+    for (long z = 0; z < n_[2]; ++z)
+      for (long y = 0; y < n_[1]; ++y) {
+        const std::size_t row = std::size_t(((first_[1] + y) >> 3) - b0_[1]) * std::size_t(bn_[0]) +
+                                std::size_t(((first_[2] + z) >> 3) - b0_[2]) * std::size_t(bn_[0] * bn_[1]);
+        for (long x = 0; x < n_[0]; ++x, ++i)
+          if (is_occupied(r.labels[i])) blocks_[row + std::size_t(((first_[0] + x) >> 3) - b0_[0])] = 1;
+      }
   }
   // Appends the whole tree (nothing for a tree without an occupied voxel); the node count.
   std::size_t write(std::vector<char>& out) {
@@ -90,12 +104,16 @@ class DirectTree {
       const std::size_t i = std::size_t(kx - first_[0]) +
                             g_.dims.nx * (std::size_t(ky - first_[1]) + g_.dims.ny * std::size_t(kz - first_[2]));
       const std::uint32_t l = r_.labels[i];
-      if (l >= occupied_.size() || !occupied_[l]) return false;
+      if (!is_occupied(l)) return false;
       lo = std::min(std::max(leaf_logodds(g_.p[i], floor_), lo_min_), lo_max_);
       colour = segment_colour(l);
       put(lo, colour, 0);
       return true;
     }
+    if (side == 8 && !blocks_[std::size_t((kx >> 3) - b0_[0]) +
+                              std::size_t(bn_[0]) * (std::size_t((ky >> 3) - b0_[1]) + std::size_t(bn_[1]) * std::size_t((kz >> 3) - b0_[2]))])
+      return false;
+    if (side == 2) return last_inner(kx, ky, kz, lo, colour);
     const std::size_t at = out_->size();
     out_->resize(at + 8);  // this node's record, filled in once its children are known
     const long half = side / 2;
@@ -121,6 +139,38 @@ class DirectTree {
     fill(at, lo, colour, children);
     return true;
   }
+  // A node of 2 x 2 x 2 leaves, the leaves read straight from the grid (node() for each, unrolled).
+  bool last_inner(long kx, long ky, long kz, float& lo, Rgb& colour) {
+    std::uint32_t label[8];
+    std::size_t index[8];
+    unsigned children = 0;
+    for (unsigned i = 0; i < 8; ++i) {
+      const long x = kx + long(i & 1) - first_[0], y = ky + long((i >> 1) & 1) - first_[1], z = kz + long(i >> 2) - first_[2];
+      if (x < 0 || y < 0 || z < 0 || x >= n_[0] || y >= n_[1] || z >= n_[2]) continue;
+      index[i] = std::size_t(x) + g_.dims.nx * (std::size_t(y) + g_.dims.ny * std::size_t(z));
+      label[i] = r_.labels[index[i]];
+      if (is_occupied(label[i])) children |= 1u << i;
+    }
+    if (children == 0) return false;
+    const std::size_t at = out_->size();
+    out_->resize(at + 8);
+    float max_lo = -std::numeric_limits<float>::max();
+    int sum[3] = {0, 0, 0}, coloured = 0;
+    for (unsigned i = 0; i < 8; ++i) {
+      if (!(children >> i & 1u)) continue;
+      const float clo = std::min(std::max(leaf_logodds(g_.p[index[i]], floor_), lo_min_), lo_max_);
+      const Rgb cc = segment_colour(label[i]);
+      put(clo, cc, 0);
+      if (clo > max_lo) max_lo = clo;
+      if (cc.r != 255 || cc.g != 255 || cc.b != 255) sum[0] += cc.r, sum[1] += cc.g, sum[2] += cc.b, ++coloured;
+    }
+    lo = max_lo;
+    colour = coloured > 0 ? Rgb{std::uint8_t(sum[0] / coloured), std::uint8_t(sum[1] / coloured), std::uint8_t(sum[2] / coloured)}
+                          : Rgb{255, 255, 255};
+    fill(at, lo, colour, children);
+    return true;
+  }
+
   void fill(std::size_t at, float lo, Rgb c, unsigned children) {
     char* p = out_->data() + at;
     std::memcpy(p, &lo, 4);
@@ -133,12 +183,16 @@ class DirectTree {
     fill(at, lo, c, children);
   }
 
+  bool is_occupied(std::uint32_t l) const { return l < occupied_.size() && occupied_[l]; }
+
   const Grid& g_;
   const Result& r_;
+  long b0_[3], bn_[3];
+  std::vector<unsigned char> blocks_;
   unsigned depth_;
   float lo_min_, lo_max_, floor_ = 0;
   long first_[3], n_[3];
-  std::vector<bool> occupied_;
+  std::vector<unsigned char> occupied_;
   std::vector<char>* out_ = nullptr;
   std::size_t nodes_ = 0;
 };
@@ -167,7 +221,7 @@ std::unique_ptr<octomap::ColorOcTree> segments_octree(const Grid& grid, const Re
         const Rgb c = segment_colour(l);
         if (node) node->setColor(c.r, c.g, c.b);
       }
-  tree->updateInnerOccupancy();
+  if (tree->getRoot()) tree->updateInnerOccupancy();  // (liboctomap's would follow a null root)
   if (placement) *placement = f.place;
   return tree;
 }

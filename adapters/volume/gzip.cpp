@@ -64,10 +64,11 @@ class BitSink {
     }
   }
   // A Huffman code of n bits, which deflate stores most significant bit first.
-  void code(std::uint32_t c, int n) {
+  void code(std::uint32_t c, int n) { put(reversed(c, n), n); }
+  static std::uint32_t reversed(std::uint32_t c, int n) {
     std::uint32_t r = 0;
     for (int k = 0; k < n; ++k) r |= ((c >> k) & 1u) << (n - 1 - k);
-    put(r, n);
+    return r;
   }
   void align() {
     if (fill_ > 0) put(0, 8 - fill_);
@@ -79,12 +80,22 @@ class BitSink {
   int fill_ = 0;
 };
 
-void fixed_literal(BitSink& b, unsigned v) {  // 0..287
-  if (v < 144) b.code(0x30 + v, 8);
-  else if (v < 256) b.code(0x190 + (v - 144), 9);
-  else if (v < 280) b.code(v - 256, 7);
-  else b.code(0xC0 + (v - 280), 8);
-}
+// The fixed literal/length codes, bit-reversed as they are written, and their lengths.
+struct FixedCodes {
+  std::uint16_t bits[288];
+  std::uint8_t length[288];
+  FixedCodes() {
+    for (unsigned v = 0; v < 288; ++v) {
+      const unsigned c = v < 144 ? 0x30 + v : v < 256 ? 0x190 + (v - 144) : v < 280 ? v - 256 : 0xC0 + (v - 280);
+      const int n = v < 144 ? 8 : v < 256 ? 9 : v < 280 ? 7 : 8;
+      bits[v] = static_cast<std::uint16_t>(BitSink::reversed(c, n));
+      length[v] = static_cast<std::uint8_t>(n);
+    }
+  }
+};
+const FixedCodes kFixed;
+
+void fixed_literal(BitSink& b, unsigned v) { b.put(kFixed.bits[v], kFixed.length[v]); }  // 0..287
 
 // A match of `len` (3..258) bytes `dist` (1..32768) bytes back.
 void fixed_match(BitSink& b, unsigned len, unsigned dist) {
@@ -143,6 +154,7 @@ bool run_piece(const unsigned char* in, std::size_t begin, std::size_t end, bool
       std::size_t n = 0;
       const std::size_t most = end - at;
       if (w == 4) {
+        while (n + 32 <= most && std::memcmp(a + n, r + n, 32) == 0) n += 32;  // eight words a step
         for (std::uint32_t x, y; n < most; n += 4) {
           std::memcpy(&x, a + n, 4);
           std::memcpy(&y, r + n, 4);
