@@ -158,6 +158,14 @@ struct PanelPixels {
   std::vector<std::uint32_t> segment;
 };
 
+// Whether a volume has states (its own or through its labels), and voxel i's.
+bool has_states(const Volume& v) { return v.states || (v.labels && v.label_states); }
+std::uint8_t state_at(const Volume& v, std::size_t i) {
+  if (v.states) return v.states[i];
+  const std::uint32_t l = v.labels[i];
+  return l < v.label_count ? v.label_states[l] : 1;
+}
+
 PanelPixels panel_pixels(const Volume& v, const Slice& s, std::size_t k) {
   std::size_t w, h;
   slice_size(v.dims, s, w, h);
@@ -168,13 +176,13 @@ PanelPixels panel_pixels(const Volume& v, const Slice& s, std::size_t k) {
   p.colour.assign(n, kBackground);
   p.key.assign(n, kNoKey);
   p.segment.assign(n, kNoSegment);
-  const bool distinct = v.states && v.labels && v.distinct_occupied;
+  const bool distinct = has_states(v) && v.labels && v.distinct_occupied;
   const Dims& d = v.dims;
   if (s.axis == kTopView) {
     // Pixel (u, q) is the column x = u k, y = h - 1 - q k. Layers from the top down, each read
     // row by row (contiguous when k = 1), until every column has found its topmost occupied voxel.
     auto source_row = [&](std::size_t z, std::size_t q) { return d.nx * (h - 1 - q * k) + d.nx * d.ny * z; };
-    if (!v.states) {
+    if (!has_states(v)) {
       std::vector<float> top(n, 0.0f);
       for (std::size_t z = 0; z < d.nz; ++z)
         for (std::size_t q = 0; q < p.h; ++q) {
@@ -191,10 +199,13 @@ PanelPixels panel_pixels(const Volume& v, const Slice& s, std::size_t k) {
       const double f = height_shade(z, d.nz);
       for (std::size_t q = 0; q < p.h; ++q) {
         const std::size_t base = source_row(z, q);
-        const std::uint8_t* src = v.states + base;
+        const std::uint32_t* lrow = v.labels ? v.labels + base : nullptr;
         for (std::size_t u = 0; u < p.w; ++u) {
           const std::size_t j = q * p.w + u;
-          if (found[j] || src[u * k] != 2) continue;
+          // (Through the labels: the occupied table, with the labels' row read in place.)
+          const bool occupied = v.states ? v.states[base + u * k] == 2
+                                         : lrow[u * k] < v.label_count && v.label_states[lrow[u * k]] == 2;
+          if (found[j] || !occupied) continue;
           const std::size_t i = base + u * k;
           found[j] = 1;
           --open;
@@ -210,19 +221,20 @@ PanelPixels panel_pixels(const Volume& v, const Slice& s, std::size_t k) {
     for (std::size_t q = 0; q < p.h; ++q)
       for (std::size_t u = 0; u < p.w; ++u) {
         const std::size_t i = voxel_at(d, s, u * k, q * k, h), j = q * p.w + u;
-        if (!v.states) {
+        if (!has_states(v)) {
           p.colour[j] = grey_of(v.probability[i]);
           continue;
         }
-        p.colour[j] = state_colour(v.states[i]);
-        if (distinct && v.states[i] == 2) {
+        const std::uint8_t st = state_at(v, i);
+        p.colour[j] = state_colour(st);
+        if (distinct && st == 2) {
           p.colour[j] = segment_colour(v.labels[i]);
           p.segment[j] = v.labels[i];
         }
-        p.key[j] = v.labels ? v.labels[i] : v.states[i];
+        p.key[j] = v.labels ? v.labels[i] : st;
       }
   }
-  if (v.states) {  // boundaries: a pixel whose key differs from its right or upper neighbour's
+  if (has_states(v)) {  // boundaries: a pixel whose key differs from its right or upper neighbour's
     std::vector<Rgb> edged = p.colour;
     for (std::size_t q = 0; q < p.h; ++q)
       for (std::size_t u = 0; u < p.w; ++u) {
@@ -363,12 +375,12 @@ FigureLayout layout_figure(const std::vector<Volume>& rows, const std::vector<Sl
   bool any_probability = false, any_states = false, any_segments = false, any_plain_occupied = false, any_top = false;
   for (std::size_t r = 0; r < rows.size(); ++r) {
     const Volume& v = rows[r];
-    if (!v.probability && !v.states)
+    if (!v.probability && !has_states(v))
       throw Error(Status::invalid_argument, "volume '" + v.title + "' has neither probabilities nor states");
-    any_probability |= v.probability != nullptr && v.states == nullptr;
-    any_states |= v.states != nullptr;
-    any_segments |= v.states && v.labels && v.distinct_occupied;
-    any_plain_occupied |= v.states && !(v.labels && v.distinct_occupied);
+    any_probability |= v.probability != nullptr && !has_states(v);
+    any_states |= has_states(v);
+    any_segments |= has_states(v) && v.labels && v.distinct_occupied;
+    any_plain_occupied |= has_states(v) && !(v.labels && v.distinct_occupied);
     for (std::size_t c = 0; c < slices.size(); ++c) {
       const Slice& s = slices[c];
       const std::size_t n[4] = {v.dims.nx, v.dims.ny, v.dims.nz, 1};
@@ -464,10 +476,20 @@ Image render_figure(const std::vector<Volume>& rows, const std::vector<Slice>& s
     for (std::size_t c = 0; c < slices.size(); ++c) {
       const Box& at = L.panels[r][c];
       const PanelPixels p = panel_pixels(v, slices[c], k);
-      for (std::size_t q = 0; q < p.h; ++q)
-        for (std::size_t u = 0; u < p.w; ++u)
-          img.fill_rect(at.x + int(u) * o.scale, at.y + int(q) * o.scale, o.scale, o.scale, p.colour[q * p.w + u]);
-      if (v.states && v.labels && v.distinct_occupied) draw_segment_ids(img, p, at, o.scale);
+      if (o.scale == 1) {  // a panel lies inside the image (layout_figure): rows copied straight
+        for (std::size_t q = 0; q < p.h; ++q) {
+          std::uint8_t* row = &img.rgb[(std::size_t(at.y) + q) * std::size_t(img.width) * 3 + std::size_t(at.x) * 3];
+          for (std::size_t u = 0; u < p.w; ++u) {
+            const Rgb c = p.colour[q * p.w + u];
+            row[3 * u] = c.r, row[3 * u + 1] = c.g, row[3 * u + 2] = c.b;
+          }
+        }
+      } else {
+        for (std::size_t q = 0; q < p.h; ++q)
+          for (std::size_t u = 0; u < p.w; ++u)
+            img.fill_rect(at.x + int(u) * o.scale, at.y + int(q) * o.scale, o.scale, o.scale, p.colour[q * p.w + u]);
+      }
+      if (has_states(v) && v.labels && v.distinct_occupied) draw_segment_ids(img, p, at, o.scale);
     }
   }
   for (const LegendItem& item : L.legend) {

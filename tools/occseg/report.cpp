@@ -204,10 +204,12 @@ void write_segmentation_png(const std::string& path, const std::string& title, c
     slices.push_back({0, x});
     slices.push_back({render::kTopView, 0});  // a room's contents seen from above
   }
-  const std::vector<std::uint8_t> states = voxel_states(r);
+  // States through the labels (one per segment): the picture reads only the voxels it draws.
+  std::vector<std::uint8_t> label_states(r.segments.size());
+  for (std::size_t l = 0; l < label_states.size(); ++l) label_states[l] = static_cast<std::uint8_t>(r.segments[l].state);
   std::vector<render::Volume> rows;
   rows.push_back({"map", d, grid.p.data(), nullptr, nullptr, false});
-  rows.push_back({"segments", d, nullptr, states.data(), r.labels.data(), true});
+  rows.push_back({"segments", d, nullptr, nullptr, r.labels.data(), true, label_states.data(), label_states.size()});
   if (truth_states) rows.push_back({"ideal state", d, nullptr, truth_states->data(), nullptr, false});
   render::FigureOptions o;
   o.title = title;
