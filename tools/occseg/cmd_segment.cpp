@@ -292,7 +292,7 @@ int run(const SegmentArgs& o) {
                                             "occseg segment " + base_name(o.input) + "  (" + std::to_string(d.nx) +
                                                 " x " + std::to_string(d.ny) + " x " + std::to_string(d.nz) +
                                                 ", preset " + preset + ")",
-                                            grid, r, nullptr, &s);
+                                            grid, r, nullptr, &s, o.pipeline.threads);
                    }});
   // A 2D map: also as the PGM/YAML pair map_server (a 2D planner) loads.
   files.push_back({"segmentation.pgm", map2d, [&](const std::string& f, StagedFiles& s, const IoProgress&) {

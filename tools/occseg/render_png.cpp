@@ -10,6 +10,7 @@
 
 #include "occseg/error.hpp"
 #include "occseg/file_write.hpp"
+#include "occseg/parallel.hpp"
 
 namespace occseg::render {
 
@@ -200,12 +201,20 @@ PanelPixels panel_pixels(const Volume& v, const Slice& s, std::size_t k) {
       for (std::size_t q = 0; q < p.h; ++q) {
         const std::size_t base = source_row(z, q);
         const std::uint32_t* lrow = v.labels ? v.labels + base : nullptr;
+        const std::uint8_t* srow = v.states ? v.states + base : nullptr;
+        const std::uint8_t* table = v.label_states;
+        const std::size_t count = v.label_count;
+        const std::uint8_t* seen = found.data() + q * p.w;
         for (std::size_t u = 0; u < p.w; ++u) {
+          // (Through the labels: the state table, with the labels' row read in place.)
+          if (srow) {
+            if (srow[u * k] != 2) continue;
+          } else {
+            const std::uint32_t l = lrow[u * k];
+            if (l >= count || table[l] != 2) continue;
+          }
+          if (seen[u]) continue;
           const std::size_t j = q * p.w + u;
-          // (Through the labels: the occupied table, with the labels' row read in place.)
-          const bool occupied = v.states ? v.states[base + u * k] == 2
-                                         : lrow[u * k] < v.label_count && v.label_states[lrow[u * k]] == 2;
-          if (found[j] || !occupied) continue;
           const std::size_t i = base + u * k;
           found[j] = 1;
           --open;
@@ -470,12 +479,17 @@ Image render_figure(const std::vector<Volume>& rows, const std::vector<Slice>& s
   Image img(L.width, L.height, kBackground);
   for (const TextBox& t : L.title) draw_text(img, t.x, t.y, t.text, kInk);
   for (const TextBox& t : L.captions) draw_text(img, t.x, t.y, t.text, kInk);
+  // The panels are independent (a top view reads the whole volume): computed side by side.
+  std::vector<PanelPixels> panels(rows.size() * slices.size());
+  parallel_for_dynamic(panels.size(), o.threads, [&](std::size_t a, std::size_t b) {
+    for (std::size_t i = a; i < b; ++i) panels[i] = panel_pixels(rows[i / slices.size()], slices[i % slices.size()], k);
+  });
   for (std::size_t r = 0; r < rows.size(); ++r) {
     const Volume& v = rows[r];
     draw_text(img, L.row_titles[r].x, L.row_titles[r].y, L.row_titles[r].text, kInk);
     for (std::size_t c = 0; c < slices.size(); ++c) {
       const Box& at = L.panels[r][c];
-      const PanelPixels p = panel_pixels(v, slices[c], k);
+      const PanelPixels p = std::move(panels[r * slices.size() + c]);
       if (o.scale == 1) {  // a panel lies inside the image (layout_figure): rows copied straight
         for (std::size_t q = 0; q < p.h; ++q) {
           std::uint8_t* row = &img.rgb[(std::size_t(at.y) + q) * std::size_t(img.width) * 3 + std::size_t(at.x) * 3];

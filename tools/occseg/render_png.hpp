@@ -58,6 +58,7 @@ struct FigureOptions {
   int scale = 1;       // pixels per voxel
   int shrink = 1;      // voxels per pixel along each axis (every shrink-th voxel is drawn), for large maps
   bool legend = true;  // the colours the rows use (layout_figure: LegendKind), the probability ramp
+  int threads = 1;     // panels computed on up to this many threads (0: all cores); the same image
 };
 
 struct Image {

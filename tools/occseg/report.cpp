@@ -185,7 +185,7 @@ json summary_json(const RunReport& run) {
 }
 
 void write_segmentation_png(const std::string& path, const std::string& title, const Grid& grid, const Result& r,
-                            const std::vector<std::uint8_t>* truth_states, StagedFiles* into) {
+                            const std::vector<std::uint8_t>* truth_states, StagedFiles* into, int threads) {
   const Dims& d = grid.dims;
   std::vector<render::Slice> slices;
   if (d.nz >= 4) {
@@ -216,6 +216,7 @@ void write_segmentation_png(const std::string& path, const std::string& title, c
   const std::size_t m = std::max({d.nx, d.ny, d.nz});
   o.shrink = static_cast<int>((m + 639) / 640);                        // panels of at most 640 pixels
   o.scale = static_cast<int>(std::clamp<std::size_t>(256 / m, 1, 8));  // small maps magnified
+  o.threads = threads;
   render::write_png(path, render::render_figure(rows, slices, o), into);
 }
 
