@@ -268,7 +268,12 @@ void draw_segment_ids(Image& img, const PanelPixels& p, const Box& at, int scale
     std::uint64_t count = 0;
     double su = 0, sv = 0;
   };
-  std::map<std::uint32_t, Stat> stats;
+  // By segment id (a table as long as the largest id drawn; the panel holds them all).
+  std::uint32_t top = 0;
+  bool any = false;
+  for (const std::uint32_t s : p.segment)
+    if (s != kNoSegment) top = std::max(top, s), any = true;
+  std::vector<Stat> stats(any ? std::size_t(top) + 1 : 0);
   for (std::size_t q = 0; q < p.h; ++q)
     for (std::size_t u = 0; u < p.w; ++u) {
       const std::uint32_t s = p.segment[q * p.w + u];
@@ -278,7 +283,9 @@ void draw_segment_ids(Image& img, const PanelPixels& p, const Box& at, int scale
       st.su += double(u);
       st.sv += double(q);
     }
-  std::vector<std::pair<std::uint32_t, Stat>> order(stats.begin(), stats.end());
+  std::vector<std::pair<std::uint32_t, Stat>> order;
+  for (std::size_t s = 0; s < stats.size(); ++s)
+    if (stats[s].count > 0) order.push_back({std::uint32_t(s), stats[s]});
   std::sort(order.begin(), order.end(), [](const auto& a, const auto& b) {
     return a.second.count != b.second.count ? a.second.count > b.second.count : a.first < b.first;
   });
@@ -599,11 +606,20 @@ void write_png(const std::string& path, const Image& img, StagedFiles* into) {
   std::vector<Rgb> palette;
   std::vector<std::uint8_t> indices(std::size_t(img.width) * img.height);
   std::uint32_t last_key = ~0u;  // not a colour: runs of one colour skip the lookup
+  std::vector<std::uint32_t> cache_key(4096, ~0u);
+  std::vector<std::uint8_t> cache_index(4096, 0);
   std::uint8_t last_index = 0;
   for (std::size_t i = 0; i < indices.size(); ++i) {
     const std::uint32_t key = (std::uint32_t(img.rgb[3 * i]) << 16) | (img.rgb[3 * i + 1] << 8) | img.rgb[3 * i + 2];
     if (key == last_key) {
       indices[i] = last_index;
+      continue;
+    }
+    // A small cache before the map: boundaries and ids switch among a few colours all the time.
+    const std::size_t slot = (key * 2654435761u) >> 20 & 4095u;
+    if (cache_key[slot] == key) {
+      indices[i] = last_index = cache_index[slot];
+      last_key = key;
       continue;
     }
     auto it = index.find(key);
@@ -617,6 +633,8 @@ void write_png(const std::string& path, const Image& img, StagedFiles* into) {
     }
     indices[i] = last_index = it->second;
     last_key = key;
+    cache_key[slot] = key;
+    cache_index[slot] = it->second;
   }
   PngSink sink;
   if (!encode(img, palette, indices, &sink)) throw Error(Status::internal, "libpng failed to encode '" + path + "'");
