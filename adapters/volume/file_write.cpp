@@ -207,6 +207,25 @@ void StagedFiles::stage(const std::string& path, const std::function<void(std::o
   files_.push_back(std::move(f));
 }
 
+void StagedFiles::adopt(StagedFiles& other) {
+  if (committed_ || other.committed_) throw Error(Status::internal, "cannot adopt files: a set was committed already");
+  // Reserved first, so that nothing below can fail half-way.
+  files_.reserve(files_.size() + other.files_.size());
+  removals_.reserve(removals_.size() + other.removals_.size());
+  for (File& f : other.files_) {
+    auto old = std::find_if(files_.begin(), files_.end(), [&](const File& o) { return o.path == f.path; });
+    if (old != files_.end()) {
+      ::unlink(old->tmp.c_str());
+      old->tmp = std::move(f.tmp);
+    } else {
+      files_.push_back(std::move(f));
+    }
+  }
+  for (std::string& r : other.removals_) removals_.push_back(std::move(r));
+  other.files_.clear();
+  other.removals_.clear();
+}
+
 void StagedFiles::remove_on_commit(const std::string& path) {
   if (committed_) throw Error(Status::internal, "cannot remove '" + path + "': the set was committed already");
   removals_.push_back(path);

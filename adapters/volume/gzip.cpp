@@ -48,6 +48,143 @@ void deflate_piece(const unsigned char* in, std::size_t n, bool last, int level,
   p.crc = crc32(0L, in, static_cast<uInt>(n));
 }
 
+// --- runs of whole words, coded by hand with deflate's fixed Huffman codes (RFC 1951, 3.2.6) ---
+
+// Bits, least significant first, as deflate packs them.
+class BitSink {
+ public:
+  explicit BitSink(std::vector<unsigned char>& out) : out_(out) {}
+  void put(std::uint32_t bits, int n) {  // n <= 32
+    acc_ |= std::uint64_t(bits) << fill_;
+    fill_ += n;
+    while (fill_ >= 8) {
+      out_.push_back(static_cast<unsigned char>(acc_));
+      acc_ >>= 8;
+      fill_ -= 8;
+    }
+  }
+  // A Huffman code of n bits, which deflate stores most significant bit first.
+  void code(std::uint32_t c, int n) { put(reversed(c, n), n); }
+  static std::uint32_t reversed(std::uint32_t c, int n) {
+    std::uint32_t r = 0;
+    for (int k = 0; k < n; ++k) r |= ((c >> k) & 1u) << (n - 1 - k);
+    return r;
+  }
+  void align() {
+    if (fill_ > 0) put(0, 8 - fill_);
+  }
+
+ private:
+  std::vector<unsigned char>& out_;
+  std::uint64_t acc_ = 0;
+  int fill_ = 0;
+};
+
+// The fixed literal/length codes, bit-reversed as they are written, and their lengths.
+struct FixedCodes {
+  std::uint16_t bits[288];
+  std::uint8_t length[288];
+  FixedCodes() {
+    for (unsigned v = 0; v < 288; ++v) {
+      const unsigned c = v < 144 ? 0x30 + v : v < 256 ? 0x190 + (v - 144) : v < 280 ? v - 256 : 0xC0 + (v - 280);
+      const int n = v < 144 ? 8 : v < 256 ? 9 : v < 280 ? 7 : 8;
+      bits[v] = static_cast<std::uint16_t>(BitSink::reversed(c, n));
+      length[v] = static_cast<std::uint8_t>(n);
+    }
+  }
+};
+const FixedCodes kFixed;
+
+void fixed_literal(BitSink& b, unsigned v) { b.put(kFixed.bits[v], kFixed.length[v]); }  // 0..287
+
+// A match of `len` (3..258) bytes `dist` (1..32768) bytes back.
+void fixed_match(BitSink& b, unsigned len, unsigned dist) {
+  static const unsigned short kLenBase[29] = {3,  4,  5,  6,  7,  8,  9,  10, 11,  13,  15,  17,  19,  23, 27,
+                                              31, 35, 43, 51, 59, 67, 83, 99, 115, 131, 163, 195, 227, 258};
+  static const unsigned char kLenExtra[29] = {0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3, 4, 4, 4, 4, 5, 5, 5, 5, 0};
+  static const unsigned short kDistBase[30] = {1,   2,   3,   4,   5,   7,    9,    13,   17,   25,   33,   49,   65,    97,    129,
+                                               193, 257, 385, 513, 769, 1025, 1537, 2049, 3073, 4097, 6145, 8193, 12289, 16385, 24577};
+  static const unsigned char kDistExtra[30] = {0, 0, 0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6, 6, 7, 7, 8, 8, 9, 9, 10, 10, 11, 11, 12, 12, 13, 13};
+  unsigned l = 28;
+  while (kLenBase[l] > len) --l;
+  fixed_literal(b, 257 + l);
+  if (kLenExtra[l]) b.put(len - kLenBase[l], kLenExtra[l]);
+  unsigned d = 29;
+  while (kDistBase[d] > dist) --d;
+  b.code(d, 5);
+  if (kDistExtra[d]) b.put(dist - kDistBase[d], kDistExtra[d]);
+}
+
+// `bytes` bytes repeating those `dist` bytes back, as matches of at most 258 bytes (none shorter
+// than 3: a remainder of 1 or 2 is taken from the match before it).
+void fixed_repeat(BitSink& b, std::size_t bytes, unsigned dist) {
+  while (bytes > 0) {
+    std::size_t m = std::min<std::size_t>(bytes, 258);
+    if (bytes > 258 && bytes - 258 < 3) m = bytes - 3;
+    fixed_match(b, static_cast<unsigned>(m), dist);
+    bytes -= m;
+  }
+}
+
+// Piece [begin, end) of `in` (offsets in bytes, multiples of runs.word) as one fixed-Huffman
+// block: at each word the longest run of words equal to the word one back, one row back or one
+// slice back (those within deflate's 32 KiB window and after the start of the data), else the
+// word as literals. A piece that is not the last ends with an empty stored block (zlib's full
+// flush), so the pieces concatenate at byte boundaries. Returns false when the piece came out
+// larger than `limit` bytes (then `p` is not valid).
+bool run_piece(const unsigned char* in, std::size_t begin, std::size_t end, bool last, const GzipRuns& runs,
+               std::size_t limit, Piece& p) {
+  p.out.clear();
+  BitSink b(p.out);
+  b.put(last ? 1 : 0, 1);
+  b.put(1, 2);  // fixed Huffman codes
+  const std::size_t w = runs.word;
+  std::size_t dists[3];
+  int nd = 0;
+  for (const std::size_t d : {std::size_t(1), runs.row, runs.slice})
+    if (d > 0 && d * w <= 32768 && std::find(dists, dists + nd, d * w) == dists + nd) dists[nd++] = d * w;
+  std::size_t at = begin;
+  while (at < end) {
+    std::size_t best = 0, best_d = 0;
+    for (int k = 0; k < nd; ++k) {
+      const std::size_t d = dists[k];
+      if (d > at) continue;
+      const unsigned char* a = in + at;
+      const unsigned char* r = a - d;
+      std::size_t n = 0;
+      const std::size_t most = end - at;
+      if (w == 4) {
+        while (n + 32 <= most && std::memcmp(a + n, r + n, 32) == 0) n += 32;  // eight words a step
+        for (std::uint32_t x, y; n < most; n += 4) {
+          std::memcpy(&x, a + n, 4);
+          std::memcpy(&y, r + n, 4);
+          if (x != y) break;
+        }
+      } else {
+        while (n < most && std::memcmp(a + n, r + n, w) == 0) n += w;
+      }
+      if (n > best) best = n, best_d = d;
+    }
+    if (best == 0) {
+      for (std::size_t k = 0; k < w; ++k) fixed_literal(b, in[at + k]);
+      at += w;
+    } else {
+      fixed_repeat(b, best, static_cast<unsigned>(best_d));
+      at += best;
+    }
+    if (p.out.size() > limit) return false;
+  }
+  fixed_literal(b, 256);  // end of block
+  if (!last) {
+    b.put(0, 3);  // an empty stored block: not final, type 0, then LEN 0 and NLEN 0xffff
+    b.align();
+    for (const unsigned char c : {0x00, 0x00, 0xff, 0xff}) p.out.push_back(c);
+  }
+  b.align();
+  p.used = p.out.size();
+  return p.used <= limit;
+}
+
 void put_le32(std::ostream& out, std::uint32_t v) {
   const unsigned char b[4] = {static_cast<unsigned char>(v), static_cast<unsigned char>(v >> 8),
                               static_cast<unsigned char>(v >> 16), static_cast<unsigned char>(v >> 24)};
@@ -57,7 +194,7 @@ void put_le32(std::ostream& out, std::uint32_t v) {
 }  // namespace
 
 void write_gzip(std::ostream& out, const void* bytes, std::size_t size, int level, int threads,
-                const IoProgress& progress) {
+                const IoProgress& progress, const GzipRuns& runs) {
   const auto* in = static_cast<const unsigned char*>(bytes);
   // The member header: no name, no time stamp (the file depends on its content only), OS Unix.
   static const unsigned char header[10] = {0x1f, 0x8b, 8, 0, 0, 0, 0, 0, 0, 3};
@@ -71,8 +208,13 @@ void write_gzip(std::ostream& out, const void* bytes, std::size_t size, int leve
     parallel_for_dynamic(count, threads, [&](std::size_t a, std::size_t b) {
       for (std::size_t k = a; k < b; ++k) {
         const std::size_t i = first + k, at = i * kGzipPiece;
-        deflate_piece(in + std::min(at, size), std::min(kGzipPiece, size - std::min(at, size)), i + 1 == pieces,
-                      level, work[k]);
+        const std::size_t n = std::min(kGzipPiece, size - std::min(at, size));
+        const bool last = i + 1 == pieces;
+        // Runs first where asked for; a piece they do not shrink to a 16th goes to zlib.
+        const bool by_runs = runs.word > 0 && size % runs.word == 0 && kGzipPiece % runs.word == 0 &&
+                             run_piece(in, std::min(at, size), std::min(at, size) + n, last, runs, n / 16 + 64, work[k]);
+        if (by_runs) work[k].crc = crc32(0L, in + std::min(at, size), static_cast<uInt>(n));
+        else deflate_piece(in + std::min(at, size), n, last, level, work[k]);
       }
     });
     for (std::size_t k = 0; k < count; ++k) {

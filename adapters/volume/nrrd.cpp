@@ -479,7 +479,7 @@ void write_nrrd(const std::string& path, NrrdType type, const Dims& dims, double
   write_file_atomically(path, [&](std::ostream& out) {
     out.write(header.data(), static_cast<std::streamsize>(header.size()));
     if (options.gzip) {
-      write_gzip(out, data, bytes, options.level, options.threads, options.progress);
+      write_gzip(out, data, bytes, options.level, options.threads, options.progress, options.runs);
       return;
     }
     // Raw: written in pieces straight from the caller's array, reporting progress between them.
@@ -504,8 +504,10 @@ void write_labels_nrrd(const std::string& path, const Grid& g, const LabelArray&
   if (labels.size() != g.dims.count())
     throw Error(Status::invalid_argument, "write_labels_nrrd: " + std::to_string(labels.size()) +
                                               " labels for " + std::to_string(g.dims.count()) + " voxels");
+  NrrdWriteOptions o = options;
+  if (o.gzip && o.runs.word == 0) o.runs = {4, g.dims.nx, g.dims.nx * g.dims.ny};  // labels: long runs
   write_nrrd(path, NrrdType::u32, g.dims, g.voxel_size, g.origin, labels.data(), labels.size() * 4, "segment labels",
-             space, into, options);
+             space, into, o);
 }
 
 }  // namespace occseg

@@ -18,6 +18,7 @@
 #include <cstring>
 #include <iostream>
 #include <memory>
+#include <mutex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -261,6 +262,7 @@ int run(const SegmentArgs& o) {
     bool applies;
     Writer write;
     bool default_here = false;  // in the default set for this input although not in every one's
+    int cost = 0;  // the larger, the earlier it starts (write_concurrently)
   };
   const bool map2d = grid.dims.nz == 1;
   std::vector<std::uint8_t> states;  // for the 2D pair, made only when it is written
@@ -290,7 +292,7 @@ int run(const SegmentArgs& o) {
                                             "occseg segment " + base_name(o.input) + "  (" + std::to_string(d.nx) +
                                                 " x " + std::to_string(d.ny) + " x " + std::to_string(d.nz) +
                                                 ", preset " + preset + ")",
-                                            grid, r, nullptr, &s);
+                                            grid, r, nullptr, &s, o.pipeline.threads);
                    }});
   // A 2D map: also as the PGM/YAML pair map_server (a 2D planner) loads.
   files.push_back({"segmentation.pgm", map2d, [&](const std::string& f, StagedFiles& s, const IoProgress&) {
@@ -318,10 +320,11 @@ int run(const SegmentArgs& o) {
                      write_scene_png(f, scene_title, grid, r, &s);
                    }});
   // Labels back on the input points (issue 26), for .pcd inputs; computed once for both files.
+  // (Both writers may run at the same time: the first to ask computes them, the other waits.)
   std::vector<std::uint32_t> point_labels;
-  bool point_labels_done = false;
+  std::once_flag point_labels_once;
   auto labels_of_points = [&]() -> const std::vector<std::uint32_t>& {
-    if (!point_labels_done) point_labels = input.point_labels(grid, r), point_labels_done = true;
+    std::call_once(point_labels_once, [&] { point_labels = input.point_labels(grid, r); });
     return point_labels;
   };
   // uint32, one label per input point in file order ([height, width] for an organized cloud),
@@ -347,6 +350,13 @@ int run(const SegmentArgs& o) {
   files.push_back({"segments.ply", true, [&](const std::string& f, StagedFiles& s, const IoProgress&) {
                      write_segments_ply(f, r, grid.voxel_size, grid.origin, &s);
                    }});
+  // Which to start first when they are written at the same time: the longest (measured on the
+  // benchmark maps, docs/performance.md), so that no thread waits alone for a late long one.
+  for (Output& f : files)
+    for (const auto& [name, cost] : {std::pair<const char*, int>{"segments.ot", 9}, {"labels.npy", 8}, {"map.nrrd", 8},
+                                     {"segments.pcd", 8}, {"points.pcd", 8}, {"segmentation.png", 7},
+                                     {"labels.nrrd", 6}, {"segments.ply", 5}, {"segments.json", 4}, {"scene.png", 3}})
+      if (f.name == name) f.cost = cost;
   // What to write: named ones must apply (a usage error otherwise, before anything is written).
   for (const std::string& n : choice.names) {
     const auto it = std::find_if(files.begin(), files.end(), [&](const Output& f) { return f.name == n; });
@@ -361,13 +371,34 @@ int run(const SegmentArgs& o) {
     const bool by_default = (info && info->by_default) || f.default_here;
     if (f.applies && (choice.all || named || (choice.defaults && by_default))) chosen.push_back(&f);
   }
+  // The files are independent: written at the same time, the costliest started first. The bar
+  // shows the share of all of them done, under the name of the file that reported last.
+  std::vector<double> done(chosen.size(), 0.0);
+  std::mutex done_mutex;
+  std::vector<OutputSet::Job> jobs;
   for (std::size_t k = 0; k < chosen.size(); ++k) {
     const std::string label = "writing " + chosen[k]->name;
-    const double share = 1.0 / double(chosen.size()), before = double(k) * share;
-    bar.update(label, before);
-    const IoProgress progress = [&bar, label, before, share](double f) { return bar.update(label, before + share * f); };
-    out.write(chosen[k]->name, [&](const std::string& f, StagedFiles& s) { chosen[k]->write(f, s, progress); });
+    jobs.push_back({chosen[k]->name, [&, k, label](const std::string& f, StagedFiles& s) {
+                      const IoProgress progress = [&, k, label](double fraction) {
+                        double total = 0;
+                        {
+                          std::lock_guard<std::mutex> lock(done_mutex);
+                          done[k] = fraction;
+                          for (double d : done) total += d;
+                        }
+                        return bar.update(label, total / double(done.size()));
+                      };
+                      set_activity(label);
+                      progress(0.0);
+                      chosen[k]->write(f, s, progress);
+                      progress(1.0);
+                    }});
   }
+  std::vector<std::size_t> start(chosen.size());
+  for (std::size_t k = 0; k < start.size(); ++k) start[k] = k;
+  std::stable_sort(start.begin(), start.end(),
+                   [&](std::size_t a, std::size_t b) { return chosen[a]->cost > chosen[b]->cost; });
+  out.write_concurrently(jobs, start, o.pipeline.threads);
   bar.update("writing", 1.0);
   // Files an earlier run left under an output's name, not written now: removed in the commit
   // (regular files only; the input itself never).

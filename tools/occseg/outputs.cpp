@@ -8,8 +8,10 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <exception>
 
 #include "occseg/error.hpp"
+#include "occseg/parallel.hpp"
 #include "progress.hpp"
 
 namespace occseg::cli {
@@ -65,6 +67,30 @@ void OutputSet::write(const std::vector<std::string>& names, const std::function
   files_.reserve(files_.size() + names.size());
   write(staged_);
   for (const std::string& n : names) files_.push_back(path(n));
+  check_interrupted();
+}
+
+void OutputSet::write_concurrently(const std::vector<Job>& jobs, const std::vector<std::size_t>& start, int threads) {
+  if (start.size() != jobs.size()) throw Error(Status::internal, "write_concurrently: the start order does not list every job");
+  std::vector<StagedFiles> sets(jobs.size());
+  std::vector<std::exception_ptr> errors(jobs.size());
+  files_.reserve(files_.size() + jobs.size());
+  parallel_for_dynamic(jobs.size(), threads, [&](std::size_t a, std::size_t b) {
+    for (std::size_t k = a; k < b; ++k) {
+      const std::size_t j = start[k];
+      try {
+        jobs[j].write(path(jobs[j].name), sets[j]);
+      } catch (...) {
+        errors[j] = std::current_exception();
+      }
+    }
+  });
+  for (const std::exception_ptr& e : errors)
+    if (e) std::rethrow_exception(e);  // `sets` removes every temporary on the way out
+  for (std::size_t j = 0; j < jobs.size(); ++j) {
+    staged_.adopt(sets[j]);
+    files_.push_back(path(jobs[j].name));
+  }
   check_interrupted();
 }
 

@@ -27,6 +27,18 @@ class OutputSet {
   void write(const std::string& name, const std::function<void(const std::string& path, StagedFiles& staged)>& write);
   // The same for a writer that stages several files (`names`, in DIR) at once.
   void write(const std::vector<std::string>& names, const std::function<void(StagedFiles& staged)>& write);
+  // Several files written at the same time, on up to `threads` threads (0: all cores), each
+  // writer staging its file into a set of its own (the writers must not share unguarded state).
+  // Jobs start in the order `start` gives (indices into `jobs`: the longest first keeps the
+  // threads busy to the end); the files are recorded, and staged for the commit, in the order of
+  // `jobs`, so the set is the same for any thread count. When writers fail, the exception of the
+  // first failed job in `jobs` order is rethrown, after every job has ended; nothing of the
+  // failed call is staged. Then throws Error(cancelled) if a signal arrived meanwhile.
+  struct Job {
+    std::string name;
+    std::function<void(const std::string& path, StagedFiles& staged)> write;
+  };
+  void write_concurrently(const std::vector<Job>& jobs, const std::vector<std::size_t>& start, int threads);
   // Removes DIR/name in the commit (StagedFiles::remove_on_commit): a file of an earlier run that
   // this set does not replace. Listed by removed().
   void remove(const std::string& name);

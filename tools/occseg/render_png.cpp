@@ -1,6 +1,7 @@
 #include "render_png.hpp"
 
 #include <png.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
@@ -9,6 +10,7 @@
 
 #include "occseg/error.hpp"
 #include "occseg/file_write.hpp"
+#include "occseg/parallel.hpp"
 
 namespace occseg::render {
 
@@ -157,6 +159,14 @@ struct PanelPixels {
   std::vector<std::uint32_t> segment;
 };
 
+// Whether a volume has states (its own or through its labels), and voxel i's.
+bool has_states(const Volume& v) { return v.states || (v.labels && v.label_states); }
+std::uint8_t state_at(const Volume& v, std::size_t i) {
+  if (v.states) return v.states[i];
+  const std::uint32_t l = v.labels[i];
+  return l < v.label_count ? v.label_states[l] : 1;
+}
+
 PanelPixels panel_pixels(const Volume& v, const Slice& s, std::size_t k) {
   std::size_t w, h;
   slice_size(v.dims, s, w, h);
@@ -167,13 +177,13 @@ PanelPixels panel_pixels(const Volume& v, const Slice& s, std::size_t k) {
   p.colour.assign(n, kBackground);
   p.key.assign(n, kNoKey);
   p.segment.assign(n, kNoSegment);
-  const bool distinct = v.states && v.labels && v.distinct_occupied;
+  const bool distinct = has_states(v) && v.labels && v.distinct_occupied;
   const Dims& d = v.dims;
   if (s.axis == kTopView) {
     // Pixel (u, q) is the column x = u k, y = h - 1 - q k. Layers from the top down, each read
     // row by row (contiguous when k = 1), until every column has found its topmost occupied voxel.
     auto source_row = [&](std::size_t z, std::size_t q) { return d.nx * (h - 1 - q * k) + d.nx * d.ny * z; };
-    if (!v.states) {
+    if (!has_states(v)) {
       std::vector<float> top(n, 0.0f);
       for (std::size_t z = 0; z < d.nz; ++z)
         for (std::size_t q = 0; q < p.h; ++q) {
@@ -190,10 +200,21 @@ PanelPixels panel_pixels(const Volume& v, const Slice& s, std::size_t k) {
       const double f = height_shade(z, d.nz);
       for (std::size_t q = 0; q < p.h; ++q) {
         const std::size_t base = source_row(z, q);
-        const std::uint8_t* src = v.states + base;
+        const std::uint32_t* lrow = v.labels ? v.labels + base : nullptr;
+        const std::uint8_t* srow = v.states ? v.states + base : nullptr;
+        const std::uint8_t* table = v.label_states;
+        const std::size_t count = v.label_count;
+        const std::uint8_t* seen = found.data() + q * p.w;
         for (std::size_t u = 0; u < p.w; ++u) {
+          // (Through the labels: the state table, with the labels' row read in place.)
+          if (srow) {
+            if (srow[u * k] != 2) continue;
+          } else {
+            const std::uint32_t l = lrow[u * k];
+            if (l >= count || table[l] != 2) continue;
+          }
+          if (seen[u]) continue;
           const std::size_t j = q * p.w + u;
-          if (found[j] || src[u * k] != 2) continue;
           const std::size_t i = base + u * k;
           found[j] = 1;
           --open;
@@ -209,19 +230,20 @@ PanelPixels panel_pixels(const Volume& v, const Slice& s, std::size_t k) {
     for (std::size_t q = 0; q < p.h; ++q)
       for (std::size_t u = 0; u < p.w; ++u) {
         const std::size_t i = voxel_at(d, s, u * k, q * k, h), j = q * p.w + u;
-        if (!v.states) {
+        if (!has_states(v)) {
           p.colour[j] = grey_of(v.probability[i]);
           continue;
         }
-        p.colour[j] = state_colour(v.states[i]);
-        if (distinct && v.states[i] == 2) {
+        const std::uint8_t st = state_at(v, i);
+        p.colour[j] = state_colour(st);
+        if (distinct && st == 2) {
           p.colour[j] = segment_colour(v.labels[i]);
           p.segment[j] = v.labels[i];
         }
-        p.key[j] = v.labels ? v.labels[i] : v.states[i];
+        p.key[j] = v.labels ? v.labels[i] : st;
       }
   }
-  if (v.states) {  // boundaries: a pixel whose key differs from its right or upper neighbour's
+  if (has_states(v)) {  // boundaries: a pixel whose key differs from its right or upper neighbour's
     std::vector<Rgb> edged = p.colour;
     for (std::size_t q = 0; q < p.h; ++q)
       for (std::size_t u = 0; u < p.w; ++u) {
@@ -246,7 +268,12 @@ void draw_segment_ids(Image& img, const PanelPixels& p, const Box& at, int scale
     std::uint64_t count = 0;
     double su = 0, sv = 0;
   };
-  std::map<std::uint32_t, Stat> stats;
+  // By segment id (a table as long as the largest id drawn; the panel holds them all).
+  std::uint32_t top = 0;
+  bool any = false;
+  for (const std::uint32_t s : p.segment)
+    if (s != kNoSegment) top = std::max(top, s), any = true;
+  std::vector<Stat> stats(any ? std::size_t(top) + 1 : 0);
   for (std::size_t q = 0; q < p.h; ++q)
     for (std::size_t u = 0; u < p.w; ++u) {
       const std::uint32_t s = p.segment[q * p.w + u];
@@ -256,7 +283,9 @@ void draw_segment_ids(Image& img, const PanelPixels& p, const Box& at, int scale
       st.su += double(u);
       st.sv += double(q);
     }
-  std::vector<std::pair<std::uint32_t, Stat>> order(stats.begin(), stats.end());
+  std::vector<std::pair<std::uint32_t, Stat>> order;
+  for (std::size_t s = 0; s < stats.size(); ++s)
+    if (stats[s].count > 0) order.push_back({std::uint32_t(s), stats[s]});
   std::sort(order.begin(), order.end(), [](const auto& a, const auto& b) {
     return a.second.count != b.second.count ? a.second.count > b.second.count : a.first < b.first;
   });
@@ -362,12 +391,12 @@ FigureLayout layout_figure(const std::vector<Volume>& rows, const std::vector<Sl
   bool any_probability = false, any_states = false, any_segments = false, any_plain_occupied = false, any_top = false;
   for (std::size_t r = 0; r < rows.size(); ++r) {
     const Volume& v = rows[r];
-    if (!v.probability && !v.states)
+    if (!v.probability && !has_states(v))
       throw Error(Status::invalid_argument, "volume '" + v.title + "' has neither probabilities nor states");
-    any_probability |= v.probability != nullptr && v.states == nullptr;
-    any_states |= v.states != nullptr;
-    any_segments |= v.states && v.labels && v.distinct_occupied;
-    any_plain_occupied |= v.states && !(v.labels && v.distinct_occupied);
+    any_probability |= v.probability != nullptr && !has_states(v);
+    any_states |= has_states(v);
+    any_segments |= has_states(v) && v.labels && v.distinct_occupied;
+    any_plain_occupied |= has_states(v) && !(v.labels && v.distinct_occupied);
     for (std::size_t c = 0; c < slices.size(); ++c) {
       const Slice& s = slices[c];
       const std::size_t n[4] = {v.dims.nx, v.dims.ny, v.dims.nz, 1};
@@ -457,16 +486,31 @@ Image render_figure(const std::vector<Volume>& rows, const std::vector<Slice>& s
   Image img(L.width, L.height, kBackground);
   for (const TextBox& t : L.title) draw_text(img, t.x, t.y, t.text, kInk);
   for (const TextBox& t : L.captions) draw_text(img, t.x, t.y, t.text, kInk);
+  // The panels are independent (a top view reads the whole volume): computed side by side.
+  std::vector<PanelPixels> panels(rows.size() * slices.size());
+  parallel_for_dynamic(panels.size(), o.threads, [&](std::size_t a, std::size_t b) {
+    for (std::size_t i = a; i < b; ++i) panels[i] = panel_pixels(rows[i / slices.size()], slices[i % slices.size()], k);
+  });
   for (std::size_t r = 0; r < rows.size(); ++r) {
     const Volume& v = rows[r];
     draw_text(img, L.row_titles[r].x, L.row_titles[r].y, L.row_titles[r].text, kInk);
     for (std::size_t c = 0; c < slices.size(); ++c) {
       const Box& at = L.panels[r][c];
-      const PanelPixels p = panel_pixels(v, slices[c], k);
-      for (std::size_t q = 0; q < p.h; ++q)
-        for (std::size_t u = 0; u < p.w; ++u)
-          img.fill_rect(at.x + int(u) * o.scale, at.y + int(q) * o.scale, o.scale, o.scale, p.colour[q * p.w + u]);
-      if (v.states && v.labels && v.distinct_occupied) draw_segment_ids(img, p, at, o.scale);
+      const PanelPixels p = std::move(panels[r * slices.size() + c]);
+      if (o.scale == 1) {  // a panel lies inside the image (layout_figure): rows copied straight
+        for (std::size_t q = 0; q < p.h; ++q) {
+          std::uint8_t* row = &img.rgb[(std::size_t(at.y) + q) * std::size_t(img.width) * 3 + std::size_t(at.x) * 3];
+          for (std::size_t u = 0; u < p.w; ++u) {
+            const Rgb c = p.colour[q * p.w + u];
+            row[3 * u] = c.r, row[3 * u + 1] = c.g, row[3 * u + 2] = c.b;
+          }
+        }
+      } else {
+        for (std::size_t q = 0; q < p.h; ++q)
+          for (std::size_t u = 0; u < p.w; ++u)
+            img.fill_rect(at.x + int(u) * o.scale, at.y + int(q) * o.scale, o.scale, o.scale, p.colour[q * p.w + u]);
+      }
+      if (has_states(v) && v.labels && v.distinct_occupied) draw_segment_ids(img, p, at, o.scale);
     }
   }
   for (const LegendItem& item : L.legend) {
@@ -523,9 +567,18 @@ bool encode(const Image& img, const std::vector<Rgb>& palette, const std::vector
     return false;
   }
   png_set_write_fn(png, sink, sink_write, sink_flush);
-  // zlib level 6: within a tenth of level 9 in size, several times faster on large flat areas.
-  png_set_compression_level(png, 6);
   const bool indexed = !palette.empty();
+  if (indexed) {
+    // Indexed rows are long runs of one index: zlib's run-length strategy (matches at distance 1)
+    // and no filter give files about as small as level 6 at a fraction of its time
+    // (docs/performance.md, "Reading and writing").
+    png_set_compression_level(png, 1);
+    png_set_compression_strategy(png, Z_RLE);
+    png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_NONE);
+  } else {
+    // zlib level 6: within a tenth of level 9 in size, several times faster on large flat areas.
+    png_set_compression_level(png, 6);
+  }
   png_set_IHDR(png, info, img.width, img.height, 8, indexed ? PNG_COLOR_TYPE_PALETTE : PNG_COLOR_TYPE_RGB,
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_color pal[256];
@@ -553,11 +606,20 @@ void write_png(const std::string& path, const Image& img, StagedFiles* into) {
   std::vector<Rgb> palette;
   std::vector<std::uint8_t> indices(std::size_t(img.width) * img.height);
   std::uint32_t last_key = ~0u;  // not a colour: runs of one colour skip the lookup
+  std::vector<std::uint32_t> cache_key(4096, ~0u);
+  std::vector<std::uint8_t> cache_index(4096, 0);
   std::uint8_t last_index = 0;
   for (std::size_t i = 0; i < indices.size(); ++i) {
     const std::uint32_t key = (std::uint32_t(img.rgb[3 * i]) << 16) | (img.rgb[3 * i + 1] << 8) | img.rgb[3 * i + 2];
     if (key == last_key) {
       indices[i] = last_index;
+      continue;
+    }
+    // A small cache before the map: boundaries and ids switch among a few colours all the time.
+    const std::size_t slot = (key * 2654435761u) >> 20 & 4095u;
+    if (cache_key[slot] == key) {
+      indices[i] = last_index = cache_index[slot];
+      last_key = key;
       continue;
     }
     auto it = index.find(key);
@@ -571,6 +633,8 @@ void write_png(const std::string& path, const Image& img, StagedFiles* into) {
     }
     indices[i] = last_index = it->second;
     last_key = key;
+    cache_key[slot] = key;
+    cache_index[slot] = it->second;
   }
   PngSink sink;
   if (!encode(img, palette, indices, &sink)) throw Error(Status::internal, "libpng failed to encode '" + path + "'");

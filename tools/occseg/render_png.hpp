@@ -37,6 +37,10 @@ struct Volume {
   const std::uint8_t* states = nullptr;
   const std::uint32_t* labels = nullptr;
   bool distinct_occupied = false;
+  // Instead of `states`: the state of each label (label_count of them), a voxel's state being
+  // that of its label; so a segmentation is drawn from its labels without a volume of states.
+  const std::uint8_t* label_states = nullptr;
+  std::size_t label_count = 0;
 };
 
 // A slice: the axis normal to it (0 x, 1 y, 2 z) and the voxel index along that axis; or axis 3,
@@ -54,6 +58,7 @@ struct FigureOptions {
   int scale = 1;       // pixels per voxel
   int shrink = 1;      // voxels per pixel along each axis (every shrink-th voxel is drawn), for large maps
   bool legend = true;  // the colours the rows use (layout_figure: LegendKind), the probability ramp
+  int threads = 1;     // panels computed on up to this many threads (0: all cores); the same image
 };
 
 struct Image {

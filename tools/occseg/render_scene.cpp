@@ -278,7 +278,23 @@ Image render_scene(const Result& r, double voxel_size, const SceneOptions& o) {
     // Voxel by voxel first: the bound on the visible voxels is loose (a solid block shows only its
     // surface), so try, and coarsen only when the sprites really pass the budget.
     std::size_t k = 1;
-    std::vector<SpritePixel> sprite = cube_sprite(A, P.scale, 1.0);
+    std::vector<SpritePixel> sprite;
+    // The sprite's pixels for each set of faces drawn (bits as `faces`), in the sprite's order,
+    // and the box they cover: a cell drawn wholly inside the view needs no test per pixel.
+    std::vector<SpritePixel> by_faces[8];
+    int su0 = 0, su1 = 0, sv0 = 0, sv1 = 0;
+    auto set_sprite = [&](double edge) {
+      sprite = cube_sprite(A, P.scale, edge);
+      for (unsigned f = 0; f < 8; ++f) {
+        by_faces[f].clear();
+        for (const SpritePixel& p : sprite)
+          if (f >> p.face & 1u) by_faces[f].push_back(p);
+      }
+      su0 = sv0 = std::numeric_limits<int>::max(), su1 = sv1 = std::numeric_limits<int>::min();
+      for (const SpritePixel& p : sprite)
+        su0 = std::min(su0, p.du), su1 = std::max(su1, p.du), sv0 = std::min(sv0, p.dv), sv1 = std::max(sv1, p.dv);
+    };
+    set_sprite(1.0);
     double budget = P.coarsen > 1 ? kPixelBudget : std::numeric_limits<double>::infinity();
     std::uint32_t cached = kNone;
     Rgb shades[3];
@@ -293,10 +309,19 @@ Image render_scene(const Result& r, double voxel_size, const SceneOptions& o) {
       const double fx = double(x * k), fy = double(y * k), fz = double(z * k);
       const int iu = int(std::lround(P.u0 + P.scale * (fx * A.rx + fy * A.ry + fz * A.rz)));
       const int iv = int(std::lround(P.v0 - P.scale * (fx * A.ux + fy * A.uy + fz * A.uz)));
-      for (const SpritePixel& p : sprite) {
-        const int u = iu + p.du, v = iv + p.dv;
-        if ((faces >> p.face & 1u) && u >= kViewX && u < kViewX + kViewWidth && v >= kViewY && v < kViewY + kViewHeight)
-          img.set(u, v, shades[p.face]);
+      const std::vector<SpritePixel>& drawn = by_faces[faces & 7u];
+      if (iu + su0 >= kViewX && iu + su1 < kViewX + kViewWidth && iv + sv0 >= kViewY && iv + sv1 < kViewY + kViewHeight) {
+        std::uint8_t* at = img.rgb.data() + (std::size_t(iv) * std::size_t(img.width) + std::size_t(iu)) * 3;
+        for (const SpritePixel& p : drawn) {
+          std::uint8_t* q = at + (std::ptrdiff_t(p.dv) * img.width + p.du) * 3;
+          const Rgb c = shades[p.face];
+          q[0] = c.r, q[1] = c.g, q[2] = c.b;
+        }
+      } else {
+        for (const SpritePixel& p : drawn) {
+          const int u = iu + p.du, v = iv + p.dv;
+          if (u >= kViewX && u < kViewX + kViewWidth && v >= kViewY && v < kViewY + kViewHeight) img.set(u, v, shades[p.face]);
+        }
       }
       budget -= double(sprite.size());
       return budget > 0;
@@ -307,7 +332,7 @@ Image render_scene(const Result& r, double voxel_size, const SceneOptions& o) {
     if (!for_each_visible(d, labels, occupied_rows(r), [t, n](std::uint32_t l) { return l < n && t[l]; }, draw)) {
       // Past the budget: start again on the coarser grid, whose work the bound does hold.
       k = coarsened = P.coarsen;
-      sprite = cube_sprite(A, P.scale, double(k));
+      set_sprite(double(k));
       budget = std::numeric_limits<double>::infinity();
       img.fill_rect(kViewX, kViewY, kViewWidth, kViewHeight, kWhite);
       draw_floor();

@@ -185,7 +185,7 @@ json summary_json(const RunReport& run) {
 }
 
 void write_segmentation_png(const std::string& path, const std::string& title, const Grid& grid, const Result& r,
-                            const std::vector<std::uint8_t>* truth_states, StagedFiles* into) {
+                            const std::vector<std::uint8_t>* truth_states, StagedFiles* into, int threads) {
   const Dims& d = grid.dims;
   std::vector<render::Slice> slices;
   if (d.nz >= 4) {
@@ -204,16 +204,19 @@ void write_segmentation_png(const std::string& path, const std::string& title, c
     slices.push_back({0, x});
     slices.push_back({render::kTopView, 0});  // a room's contents seen from above
   }
-  const std::vector<std::uint8_t> states = voxel_states(r);
+  // States through the labels (one per segment): the picture reads only the voxels it draws.
+  std::vector<std::uint8_t> label_states(r.segments.size());
+  for (std::size_t l = 0; l < label_states.size(); ++l) label_states[l] = static_cast<std::uint8_t>(r.segments[l].state);
   std::vector<render::Volume> rows;
   rows.push_back({"map", d, grid.p.data(), nullptr, nullptr, false});
-  rows.push_back({"segments", d, nullptr, states.data(), r.labels.data(), true});
+  rows.push_back({"segments", d, nullptr, nullptr, r.labels.data(), true, label_states.data(), label_states.size()});
   if (truth_states) rows.push_back({"ideal state", d, nullptr, truth_states->data(), nullptr, false});
   render::FigureOptions o;
   o.title = title;
   const std::size_t m = std::max({d.nx, d.ny, d.nz});
   o.shrink = static_cast<int>((m + 639) / 640);                        // panels of at most 640 pixels
   o.scale = static_cast<int>(std::clamp<std::size_t>(256 / m, 1, 8));  // small maps magnified
+  o.threads = threads;
   render::write_png(path, render::render_figure(rows, slices, o), into);
 }
 

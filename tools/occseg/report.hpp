@@ -53,9 +53,11 @@ nlohmann::json summary_json(const RunReport& run);
 // largest object, or the middle when there is none, and the top view) through the map (grey),
 // the segmentation (state colours, segment boundaries, each occupied segment in its palette
 // colour, ids on the larger ones) and, when given, an ideal state (the demo's ground truth), with
-// a legend. Slices, layout and scale: see docs/cli.md.
+// a legend. Slices, layout and scale: see docs/cli.md. `threads`: for the panels (the same file
+// for any count).
 void write_segmentation_png(const std::string& path, const std::string& title, const Grid& grid, const Result& r,
-                            const std::vector<std::uint8_t>* truth_states = nullptr, StagedFiles* into = nullptr);
+                            const std::vector<std::uint8_t>* truth_states = nullptr, StagedFiles* into = nullptr,
+                            int threads = 1);
 
 // scene.png: the occupied segments as shaded voxels seen obliquely from above, one colour per
 // segment, with a scale bar and a legend of the largest segments (render_scene.hpp).

@@ -86,6 +86,12 @@ class StagedFiles {
   // does not contain; the caller decides which those are.
   void remove_on_commit(const std::string& path);
 
+  // Takes over the staged files and removals of `other` (not committed), after this set's own,
+  // as if they had been staged here in the same order; `other` is left empty. So several sets,
+  // each filled by its own thread, can be committed together. Staging one path in both: the
+  // version of `other` replaces this set's.
+  void adopt(StagedFiles& other);
+
   // Removes the temporaries of a set not committed and forgets them (the destructor does this).
   void discard() noexcept;
 

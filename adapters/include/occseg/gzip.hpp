@@ -17,9 +17,21 @@ namespace occseg {
 // count. At most 2 x threads pieces are held in memory at a time; each is written as soon as the
 // pieces before it are. Throws Error(internal) if zlib fails (it does not for valid arguments),
 // Error(no_memory) when zlib cannot allocate, Error(cancelled) when `progress` says so.
+//
+// With `runs` (word > 0), for data made of long runs of equal words (labels), each piece is first
+// coded without zlib as repeats of whole words (a word equal to the one before it, or to the one
+// `row` or `slice` words back, x fastest) in deflate's fixed Huffman codes, a pass at memory
+// speed; a piece that this does not shrink to a 16th of its size is deflated by zlib instead.
+// Either way the stream is plain deflate, and the output still depends only on the bytes,
+// `level` and `runs`.
 inline constexpr std::size_t kGzipPiece = std::size_t(1) << 22;
+struct GzipRuns {
+  std::size_t word = 0;   // bytes per word: a multiple of it is the data's size (else no runs)
+  std::size_t row = 0;    // words per row (0: none)
+  std::size_t slice = 0;  // words per slice (0: none)
+};
 void write_gzip(std::ostream& out, const void* bytes, std::size_t size, int level = 1, int threads = 0,
-                const IoProgress& progress = {});
+                const IoProgress& progress = {}, const GzipRuns& runs = {});
 
 // Inflates gzip data (one member or several concatenated, as gunzip reads them; zlib data is
 // accepted too) into exactly `size` bytes at `out`, never writing past them. Returns "" on

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "occseg/grid.hpp"
+#include "occseg/gzip.hpp"
 #include "occseg/io_progress.hpp"
 #include "occseg/uninit_vector.hpp"
 
@@ -56,6 +57,9 @@ struct NrrdWriteOptions {
   int level = 1;
   int threads = 0;
   IoProgress progress;  // fraction of the samples written
+  // Runs of equal words to code without zlib (write_gzip); write_labels_nrrd sets them for its
+  // uint32 labels, rows and slices of the grid.
+  GzipRuns runs;
 };
 
 // A map from a volume: float/double probabilities in [0, 1], uint8/uint16 scaled 0..max to

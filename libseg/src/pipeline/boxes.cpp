@@ -99,9 +99,24 @@ __int128 cross(const Point& o, const Point& a, const Point& b) {
 // enclosing rectangle has a side along a hull edge). The angle is brought into [-45, 45)
 // degrees, where the rectangle is the same. Identity when the hull has fewer than 3 points.
 Mat3 best_yaw(const std::vector<Point>& pts, std::size_t begin, std::size_t end) {
+  // Only the first and the last voxel of each row y can be a corner of the hull (any other lies
+  // between them), so the hull is that of those two per row: the same corners in the same
+  // order, from a sort of two points per row instead of one per voxel.
+  std::int64_t y0 = pts[begin].y, y1 = pts[begin].y;
+  for (std::size_t i = begin; i < end; ++i) y0 = std::min(y0, pts[i].y), y1 = std::max(y1, pts[i].y);
+  std::vector<std::int64_t> row_lo(std::size_t(y1 - y0 + 1), INT64_MAX), row_hi(row_lo.size(), INT64_MIN);
+  for (std::size_t i = begin; i < end; ++i) {
+    const std::size_t r = std::size_t(pts[i].y - y0);
+    row_lo[r] = std::min(row_lo[r], pts[i].x);
+    row_hi[r] = std::max(row_hi[r], pts[i].x);
+  }
   std::vector<Point> xy;
-  xy.reserve(end - begin);
-  for (std::size_t i = begin; i < end; ++i) xy.push_back({pts[i].x, pts[i].y, 0});
+  xy.reserve(2 * row_lo.size());
+  for (std::size_t r = 0; r < row_lo.size(); ++r)
+    if (row_lo[r] <= row_hi[r]) {
+      xy.push_back({row_lo[r], y0 + std::int64_t(r), 0});
+      if (row_hi[r] != row_lo[r]) xy.push_back({row_hi[r], y0 + std::int64_t(r), 0});
+    }
   std::sort(xy.begin(), xy.end(), [](const Point& a, const Point& b) { return a.x != b.x ? a.x < b.x : a.y < b.y; });
   xy.erase(std::unique(xy.begin(), xy.end(), [](const Point& a, const Point& b) { return a.x == b.x && a.y == b.y; }),
            xy.end());
