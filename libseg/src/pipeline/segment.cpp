@@ -18,6 +18,7 @@
 #include "occseg/parallel.hpp"
 #include "rules/objects.hpp"
 #include "rules/planes.hpp"
+#include "rules/surface_band.hpp"
 #include "stages/refine.hpp"
 #include "occseg/registry.hpp"
 #include "stages/texture.hpp"
@@ -221,8 +222,10 @@ Result segment_into(const Grid& grid, const Params& requested, bool keep_stages,
   // growth's bit masks, then the rules': allocated apart, they raised the peak by 0.25 byte per
   // voxel.
   detail::refine(states.data(), own, grid.dims, params, scratch, room, &growth, k);
-  if (params.preset == Preset::default_preset)
+  if (params.preset == Preset::default_preset) {
     detail::apply_voxel_rules(states.data(), own, grid.dims, params, scratch, room, k);
+    apply_surface_band(states.data(), grid.dims, params, scratch, room);
+  }
   if (!workspace) {  // not at the labelling's peak
     local.unknown_bits = std::vector<std::uint64_t>();
     local.occupied_bits = std::vector<std::uint64_t>();
