@@ -2,11 +2,13 @@
 """The scene table before and after the object rules (issue 23), on the real files and the
 simulated scenes: the columns of docs/experiments.md, "Objects, speckles, pockets".
 
-usage: scripts/scene-report.py [--build build] [--work DIR] [--real-only | --sim-only] [--sim-dims NX NY NZ]
+usage: scripts/scene-report.py [--build build] [--work DIR] [--real-only | --sim-only] [--sim-dims NX NY NZ] [--band]
 
-"before" is the default preset with the three rules off (object_gap=0, min_object_voxels=0,
-min_pocket_voxels=0: the labels of the default preset before the rules); "after" is the default
-preset as it is. Real files are read from ../shared/data/ (relative to the repository root)."""
+"before" is the default preset with the rules off (object_gap=0, min_object_voxels=0,
+min_pocket_voxels=0, surface_band=0: the labels of the default preset before the rules); "after"
+is the default preset as it is. With --band, "before" is the default preset with only the surface
+band off (surface_band=0): the surface band's own effect. Real files are read from ../shared/data/
+(relative to the repository root)."""
 import argparse
 import json
 import os
@@ -16,7 +18,9 @@ import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DATA = os.path.join(os.path.dirname(ROOT), "shared", "data")
-OFF = ["--param", "object_gap=0", "--param", "min_object_voxels=0", "--param", "min_pocket_voxels=0"]
+OFF = ["--param", "object_gap=0", "--param", "min_object_voxels=0", "--param", "min_pocket_voxels=0",
+       "--param", "surface_band=0"]
+BAND_OFF = ["--param", "surface_band=0"]
 REAL = [("geb079.bt (native 8 cm)", "geb079.bt", []),
         ("office1.pcd at 2 cm", "office1.pcd", ["--voxel-size", "0.02"]),
         ("table scene at 1 cm", "table_scene_mug_stereo_textured.pcd", ["--voxel-size", "0.01"]),
@@ -58,8 +62,8 @@ def table_columns(segments):
     }
 
 
-def segment(tool, path, extra, out):
-    run([tool, "segment", path, "--out", out, "--quiet"] + extra)
+def segment(tool, path, extra, out, outputs="segments.json"):
+    run([tool, "segment", path, "--out", out, "--quiet", "--outputs", outputs] + extra)
     with open(os.path.join(out, "segments.json")) as f:
         return json.load(f)["segments"]
 
@@ -96,7 +100,8 @@ def simulated(tool, work, dims):
         rows = []
         for label, params in (("before", OFF), ("after", [])):
             out = os.path.join(work, "seg-" + scene + "-" + label)
-            segs = segment(tool, os.path.join(truth, "map.npy"), ["--voxel-size", "0.04"] + params, out)
+            segs = segment(tool, os.path.join(truth, "map.npy"), ["--voxel-size", "0.04"] + params, out,
+                           "labels.npy,segments.json")
             s = score(tool, truth, os.path.join(out, "labels.npy"), os.path.join(out, "segments.json"))
             rows.append((label, s, table_columns(segs)))
         rows.append(("baseline", score(tool, truth, method="baseline"), None))
@@ -117,7 +122,10 @@ def main():
     ap.add_argument("--real-only", action="store_true")
     ap.add_argument("--sim-only", action="store_true")
     ap.add_argument("--sim-dims", nargs=3)
+    ap.add_argument("--band", action="store_true", help="before: only the surface band off")
     a = ap.parse_args()
+    if a.band:
+        OFF[:] = BAND_OFF
     tool = os.path.join(a.build, "tools", "occseg")
     with tempfile.TemporaryDirectory() as tmp:
         work = a.work or tmp

@@ -222,9 +222,10 @@ Result segment_into(const Grid& grid, const Params& requested, bool keep_stages,
   // growth's bit masks, then the rules': allocated apart, they raised the peak by 0.25 byte per
   // voxel.
   detail::refine(states.data(), own, grid.dims, params, scratch, room, &growth, k);
+  std::vector<std::uint64_t> band;  // the voxels the surface band made occupied, for rule 7's sizes
   if (params.preset == Preset::default_preset) {
     detail::apply_voxel_rules(states.data(), own, grid.dims, params, scratch, room, k);
-    apply_surface_band(states.data(), grid.dims, params, scratch, room);
+    apply_surface_band(states.data(), grid.dims, params, scratch, room, params.min_object_voxels > 0 ? &band : nullptr);
   }
   if (!workspace) {  // not at the labelling's peak
     local.unknown_bits = std::vector<std::uint64_t>();
@@ -237,7 +238,10 @@ Result segment_into(const Grid& grid, const Params& requested, bool keep_stages,
                            params.occupied_connectivity == 26, ws.run_starts, k);
   // Part of "labelling" for callers: they decide which regions are objects.
   if (params.preset == Preset::default_preset) {
-    group_objects(grid, r.labels, r.segments, params);
+    const std::vector<std::uint64_t> band_voxels =
+        surface_band_voxels(band, grid.dims, r.labels.data(), r.segments.size());
+    band = std::vector<std::uint64_t>();
+    group_objects(grid, r.labels, r.segments, params, &band_voxels);
     if (params.support_plane > 0)
       split_support_planes(grid, r.labels, r.segments, static_cast<std::size_t>(params.support_plane),
                            params.occupied_connectivity == 26, params.threads, k);

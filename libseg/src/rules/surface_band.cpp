@@ -108,7 +108,8 @@ word_t* within(const Layout& L, const std::uint8_t* st, std::uint8_t v, int r, w
 std::size_t surface_band_scratch_bytes(const Dims& dims) { return 3 * Layout(dims).words() * sizeof(std::uint64_t); }
 
 void apply_surface_band(std::uint8_t* st, const Dims& dims, const Params& params, std::uint8_t* scratch,
-                        std::size_t scratch_bytes) {
+                        std::size_t scratch_bytes, std::vector<std::uint64_t>* added) {
+  if (added) added->clear();
   const int r = params.surface_band;
   if (r <= 0 || dims.count() == 0) return;
   const Layout L(dims);
@@ -142,6 +143,7 @@ void apply_surface_band(std::uint8_t* st, const Dims& dims, const Params& params
       for (std::size_t i = z0 * L.P; i < z1 * L.P; ++i) c[i] &= m[i];
     });
   }
+  if (added) added->assign(c, c + n);
   parallel_for(L.nz, t, [&](std::size_t z0, std::size_t z1) {
     for (std::size_t row = z0 * L.ny; row < z1 * L.ny; ++row) {
       std::uint8_t* const s = st + row * L.nx;
@@ -150,6 +152,18 @@ void apply_surface_band(std::uint8_t* st, const Dims& dims, const Params& params
           s[w * 64 + static_cast<std::size_t>(__builtin_ctzll(bits))] = kOccupied;
     }
   });
+}
+
+std::vector<std::uint64_t> surface_band_voxels(const std::vector<std::uint64_t>& added, const Dims& dims,
+                                               const std::uint32_t* labels, std::size_t segments) {
+  std::vector<std::uint64_t> count(segments, 0);
+  if (added.empty()) return count;
+  const Layout L(dims);
+  for (std::size_t row = 0; row < dims.ny * dims.nz; ++row)
+    for (std::size_t w = 0; w < L.W; ++w)
+      for (std::uint64_t bits = added[row * L.W + w]; bits; bits &= bits - 1)
+        ++count[labels[row * L.nx + w * 64 + static_cast<std::size_t>(__builtin_ctzll(bits))]];
+  return count;
 }
 
 }  // namespace occseg
