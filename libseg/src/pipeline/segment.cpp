@@ -225,7 +225,8 @@ Result segment_into(const Grid& grid, const Params& requested, bool keep_stages,
   std::vector<std::uint64_t> band;  // the voxels the surface band made occupied, for rule 7's sizes
   if (params.preset == Preset::default_preset) {
     detail::apply_voxel_rules(states.data(), own, grid.dims, params, scratch, room, k);
-    apply_surface_band(states.data(), grid.dims, params, scratch, room, params.min_object_voxels > 0 ? &band : nullptr);
+    apply_surface_band(states.data(), grid.dims, params, scratch, room, params.min_object_voxels > 0 ? &band : nullptr,
+                       k);
   }
   if (!workspace) {  // not at the labelling's peak
     local.unknown_bits = std::vector<std::uint64_t>();

@@ -3,6 +3,8 @@
 // them, each pass over whole masks parallel over planes.
 #include "rules/surface_band.hpp"
 
+#include <algorithm>
+#include <utility>
 #include <vector>
 
 #include "occseg/parallel.hpp"
@@ -14,9 +16,7 @@ namespace occseg {
 namespace {
 
 using detail::word_t;
-using rules::kFree;
 using rules::kOccupied;
-using rules::kUnknown;
 
 struct Layout {
   std::size_t nx, ny, nz, W, P;  // W words per row, P words per plane
@@ -43,72 +43,60 @@ void x_row(const word_t* in, word_t* out, std::size_t W, std::uint64_t tail) {
   }
 }
 
-// One pass of the 3 x 3 x 3 box erosion or dilation along one axis (0: x, 1: y, 2: z), from `in`
-// to `out` (apart). Neighbours outside the map are left out (erosion: 1, dilation: 0).
+// The planes [z0, z1) of one pass of the 3 x 3 x 3 box erosion or dilation along one axis (0: x,
+// 1: y, 2: z), from `in` to `out` (apart). Neighbours outside the map are left out (erosion: 1,
+// dilation: 0). The y and z passes run over whole planes: rows y - 1 and y + 1 are W words
+// before and after, planes z - 1 and z + 1 are P words before and after.
 template <bool Erode>
-void box_axis(const Layout& L, const word_t* in, word_t* out, int axis, int threads) {
-  parallel_for(L.nz, threads, [&](std::size_t z0, std::size_t z1) {
-    for (std::size_t z = z0; z < z1; ++z)
-      for (std::size_t y = 0; y < L.ny; ++y) {
-        const std::size_t at = z * L.P + y * L.W;
-        if (axis == 0) {
-          x_row<Erode>(in + at, out + at, L.W, L.tail);
-          continue;
-        }
-        const std::size_t step = axis == 1 ? L.W : L.P;
-        const bool lo = axis == 1 ? y > 0 : z > 0, hi = axis == 1 ? y + 1 < L.ny : z + 1 < L.nz;
-        for (std::size_t i = 0; i < L.W; ++i) {
-          std::uint64_t v = in[at + i];
-          if (lo) v = Erode ? v & in[at + i - step] : v | in[at + i - step];
-          if (hi) v = Erode ? v & in[at + i + step] : v | in[at + i + step];
-          out[at + i] = v;
-        }
-      }
-  });
-}
-
-// out = the voxels of `in` and their 6 face neighbours (one face step of dilation).
-void face_dilate(const Layout& L, const word_t* in, word_t* out, int threads) {
-  parallel_for(L.nz, threads, [&](std::size_t z0, std::size_t z1) {
-    for (std::size_t z = z0; z < z1; ++z)
-      for (std::size_t y = 0; y < L.ny; ++y) {
-        const std::size_t at = z * L.P + y * L.W;
-        x_row<false>(in + at, out + at, L.W, L.tail);
-        for (std::size_t i = 0; i < L.W; ++i) {
-          std::uint64_t v = out[at + i];
-          if (y > 0) v |= in[at + i - L.W];
-          if (y + 1 < L.ny) v |= in[at + i + L.W];
-          if (z > 0) v |= in[at + i - L.P];
-          if (z + 1 < L.nz) v |= in[at + i + L.P];
-          out[at + i] = v;
-        }
-      }
-  });
-}
-
-void pack(const Layout& L, const std::uint8_t* st, std::uint8_t v, word_t* out, int threads) {
-  parallel_for(L.nz, threads, [&](std::size_t z0, std::size_t z1) {
-    for (std::size_t r = z0 * L.ny; r < z1 * L.ny; ++r) detail::pack_equal(st + r * L.nx, L.nx, v, out + r * L.W);
-  });
-}
-
-// The voxels of state v within r face steps, into `a` (with `b` as the other buffer of the
-// ping-pong); returns the buffer that holds them.
-word_t* within(const Layout& L, const std::uint8_t* st, std::uint8_t v, int r, word_t* a, word_t* b, int threads) {
-  pack(L, st, v, a, threads);
-  for (int k = 0; k < r; ++k) {
-    face_dilate(L, a, b, threads);
-    std::swap(a, b);
+void box_axis(const Layout& L, const word_t* in, word_t* out, int axis, std::size_t z0, std::size_t z1) {
+  for (std::size_t z = z0; z < z1; ++z) {
+    const word_t* const a = in + z * L.P;
+    word_t* const o = out + z * L.P;
+    if (axis == 0) {
+      for (std::size_t y = 0; y < L.ny; ++y) x_row<Erode>(a + y * L.W, o + y * L.W, L.W, L.tail);
+      continue;
+    }
+    std::copy(a, a + L.P, o);
+    const auto op = [](std::uint64_t x, std::uint64_t y) { return Erode ? x & y : x | y; };
+    if (axis == 1) {  // rows y - 1 and y + 1, W words before and after within the plane
+      for (std::size_t i = L.W; i < L.P; ++i) o[i] = op(o[i], a[i - L.W]);
+      for (std::size_t i = 0; i + L.W < L.P; ++i) o[i] = op(o[i], a[i + L.W]);
+    } else {  // planes z - 1 and z + 1, P words before and after
+      if (z > 0)
+        for (std::size_t i = 0; i < L.P; ++i) o[i] = op(o[i], a[i - L.P]);
+      if (z + 1 < L.nz)
+        for (std::size_t i = 0; i < L.P; ++i) o[i] = op(o[i], a[i + L.P]);
+    }
   }
-  return a;
+}
+
+// The planes [z0, z1) of out = the voxels of `in` and their 6 face neighbours (one face step).
+void face_dilate(const Layout& L, const word_t* in, word_t* out, std::size_t z0, std::size_t z1) {
+  for (std::size_t z = z0; z < z1; ++z) {
+    const word_t* const a = in + z * L.P;
+    word_t* const o = out + z * L.P;
+    for (std::size_t y = 0; y < L.ny; ++y) x_row<false>(a + y * L.W, o + y * L.W, L.W, L.tail);
+    for (std::size_t i = L.W; i < L.P; ++i) o[i] |= a[i - L.W];
+    for (std::size_t i = 0; i + L.W < L.P; ++i) o[i] |= a[i + L.W];
+    if (z > 0)
+      for (std::size_t i = 0; i < L.P; ++i) o[i] |= a[i - L.P];
+    if (z + 1 < L.nz)
+      for (std::size_t i = 0; i < L.P; ++i) o[i] |= a[i + L.P];
+  }
+}
+
+// Runs fn(z0, z1) over the planes on the threads; every pass waits for the one before.
+template <typename Fn>
+void planes(const Layout& L, int threads, Fn&& fn) {
+  parallel_for(L.nz, threads, [&](std::size_t z0, std::size_t z1) { fn(z0, z1); });
 }
 
 }  // namespace
 
-std::size_t surface_band_scratch_bytes(const Dims& dims) { return 3 * Layout(dims).words() * sizeof(std::uint64_t); }
+std::size_t surface_band_scratch_bytes(const Dims& dims) { return 4 * Layout(dims).words() * sizeof(std::uint64_t); }
 
 void apply_surface_band(std::uint8_t* st, const Dims& dims, const Params& params, std::uint8_t* scratch,
-                        std::size_t scratch_bytes, std::vector<std::uint64_t>* added) {
+                        std::size_t scratch_bytes, std::vector<std::uint64_t>* added, const kernels::Table& k) {
   if (added) added->clear();
   const int r = params.surface_band;
   if (r <= 0 || dims.count() == 0) return;
@@ -119,32 +107,45 @@ void apply_surface_band(std::uint8_t* st, const Dims& dims, const Params& params
   if (scratch && surface_band_scratch_bytes(dims) <= scratch_bytes) {
     base = reinterpret_cast<word_t*>(scratch);
   } else {
-    own.resize(3 * n);
+    own.resize(4 * n);
     base = reinterpret_cast<word_t*>(own.data());
   }
-  word_t *const c = base, *a = base + n, *b = base + 2 * n;
+  word_t *const c = base, *u = base + n, *a = base + 2 * n, *b = base + 3 * n;
   const int t = params.threads;
-  // The thin free voxels: free and not in the opening of the free voxels by the 3 x 3 x 3 cube.
-  pack(L, st, kFree, c, t);
-  box_axis<true>(L, c, a, 0, t);
-  box_axis<true>(L, a, b, 1, t);
-  box_axis<true>(L, b, a, 2, t);
-  box_axis<false>(L, a, b, 0, t);
-  box_axis<false>(L, b, a, 1, t);
-  box_axis<false>(L, a, b, 2, t);  // b: the opening
-  parallel_for(L.nz, t, [&](std::size_t z0, std::size_t z1) {
+  // c: the free voxels, u: the unknown ones, row by row.
+  planes(L, t, [&](std::size_t z0, std::size_t z1) {
+    for (std::size_t row = z0 * L.ny; row < z1 * L.ny; ++row)
+      k.refine.pack_states(st + row * L.nx, L.nx, u + row * L.W, c + row * L.W);
+  });
+  // The thin free voxels: c without the opening of c by the 3 x 3 x 3 cube (into b).
+  planes(L, t, [&](std::size_t z0, std::size_t z1) { box_axis<true>(L, c, a, 0, z0, z1); });
+  planes(L, t, [&](std::size_t z0, std::size_t z1) { box_axis<true>(L, a, b, 1, z0, z1); });
+  planes(L, t, [&](std::size_t z0, std::size_t z1) { box_axis<true>(L, b, a, 2, z0, z1); });
+  planes(L, t, [&](std::size_t z0, std::size_t z1) { box_axis<false>(L, a, b, 0, z0, z1); });
+  planes(L, t, [&](std::size_t z0, std::size_t z1) { box_axis<false>(L, b, a, 1, z0, z1); });
+  planes(L, t, [&](std::size_t z0, std::size_t z1) {
+    box_axis<false>(L, a, b, 2, z0, z1);  // b: the opening
     for (std::size_t i = z0 * L.P; i < z1 * L.P; ++i) c[i] &= ~b[i];
   });
-  // Near an occupied voxel, then near an unknown one (the states are still as they came in).
-  const std::uint8_t near_states[2] = {kOccupied, kUnknown};
-  for (const std::uint8_t v : near_states) {
-    const word_t* const m = within(L, st, v, r, a, b, t);
-    parallel_for(L.nz, t, [&](std::size_t z0, std::size_t z1) {
+  // Within r face steps of an unknown voxel (u, then a, b in turn), then of an occupied one. The
+  // states are still as they came in: there is no cascade.
+  const auto near = [&](word_t* m, word_t* other) {
+    for (int step = 0; step < r; ++step) {
+      planes(L, t, [&](std::size_t z0, std::size_t z1) { face_dilate(L, m, other, z0, z1); });
+      std::swap(m, other);
+    }
+    planes(L, t, [&](std::size_t z0, std::size_t z1) {
       for (std::size_t i = z0 * L.P; i < z1 * L.P; ++i) c[i] &= m[i];
     });
-  }
+  };
+  near(u, a);
+  planes(L, t, [&](std::size_t z0, std::size_t z1) {
+    for (std::size_t row = z0 * L.ny; row < z1 * L.ny; ++row)
+      k.refine.pack_equal(st + row * L.nx, L.nx, kOccupied, a + row * L.W);
+  });
+  near(a, b);
   if (added) added->assign(c, c + n);
-  parallel_for(L.nz, t, [&](std::size_t z0, std::size_t z1) {
+  planes(L, t, [&](std::size_t z0, std::size_t z1) {
     for (std::size_t row = z0 * L.ny; row < z1 * L.ny; ++row) {
       std::uint8_t* const s = st + row * L.nx;
       for (std::size_t w = 0; w < L.W; ++w)

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "kernels/kernels.hpp"
 #include "occseg/grid.hpp"
 #include "occseg/params.hpp"
 
@@ -26,10 +27,11 @@ namespace occseg {
 // makes another one thin). Only free voxels change, and only to occupied: a voxel whose own
 // probability is occupied is never made free, an unknown voxel never changes. Rows are
 // independent: the result never depends on `params.threads`. `scratch` (8-byte aligned, or
-// nullptr) holds the rule's three bit masks if it has room (scratch_bytes). `added` (if given)
+// nullptr) holds the rule's four bit masks if it has room (scratch_bytes). `added` (if given)
 // receives the voxels made occupied as a bit mask (ceil(nx / 64) words per row of voxels).
 void apply_surface_band(std::uint8_t* states, const Dims& dims, const Params& params, std::uint8_t* scratch = nullptr,
-                        std::size_t scratch_bytes = 0, std::vector<std::uint64_t>* added = nullptr);
+                        std::size_t scratch_bytes = 0, std::vector<std::uint64_t>* added = nullptr,
+                        const kernels::Table& k = kernels::active());
 inline void apply_surface_band(std::vector<std::uint8_t>& states, const Dims& dims, const Params& params) {
   apply_surface_band(states.data(), dims, params);
 }
@@ -40,7 +42,7 @@ inline void apply_surface_band(std::vector<std::uint8_t>& states, const Dims& di
 std::vector<std::uint64_t> surface_band_voxels(const std::vector<std::uint64_t>& added, const Dims& dims,
                                                const std::uint32_t* labels, std::size_t segments);
 
-// The bytes of scratch the rule uses on a map of `dims` (three bit masks).
+// The bytes of scratch the rule uses on a map of `dims` (four bit masks).
 std::size_t surface_band_scratch_bytes(const Dims& dims);
 
 }  // namespace occseg
