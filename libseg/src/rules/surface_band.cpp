@@ -49,39 +49,44 @@ void x_row(const word_t* in, word_t* out, std::size_t W, std::uint64_t tail) {
 // before and after, planes z - 1 and z + 1 are P words before and after.
 template <bool Erode>
 void box_axis(const Layout& L, const word_t* in, word_t* out, int axis, std::size_t z0, std::size_t z1) {
+  // (Sizes in locals: a store through word_t, which may alias anything, would reload them.)
+  const std::size_t W = L.W, P = L.P, ny = L.ny, nz = L.nz;
+  const std::uint64_t tail = L.tail;
   for (std::size_t z = z0; z < z1; ++z) {
-    const word_t* const a = in + z * L.P;
-    word_t* const o = out + z * L.P;
+    const word_t* const a = in + z * P;
+    word_t* const o = out + z * P;
     if (axis == 0) {
-      for (std::size_t y = 0; y < L.ny; ++y) x_row<Erode>(a + y * L.W, o + y * L.W, L.W, L.tail);
+      for (std::size_t y = 0; y < ny; ++y) x_row<Erode>(a + y * W, o + y * W, W, tail);
       continue;
     }
-    std::copy(a, a + L.P, o);
+    std::copy(a, a + P, o);
     const auto op = [](std::uint64_t x, std::uint64_t y) { return Erode ? x & y : x | y; };
     if (axis == 1) {  // rows y - 1 and y + 1, W words before and after within the plane
-      for (std::size_t i = L.W; i < L.P; ++i) o[i] = op(o[i], a[i - L.W]);
-      for (std::size_t i = 0; i + L.W < L.P; ++i) o[i] = op(o[i], a[i + L.W]);
+      for (std::size_t i = W; i < P; ++i) o[i] = op(o[i], a[i - W]);
+      for (std::size_t i = 0; i + W < P; ++i) o[i] = op(o[i], a[i + W]);
     } else {  // planes z - 1 and z + 1, P words before and after
       if (z > 0)
-        for (std::size_t i = 0; i < L.P; ++i) o[i] = op(o[i], a[i - L.P]);
-      if (z + 1 < L.nz)
-        for (std::size_t i = 0; i < L.P; ++i) o[i] = op(o[i], a[i + L.P]);
+        for (std::size_t i = 0; i < P; ++i) o[i] = op(o[i], a[i - P]);
+      if (z + 1 < nz)
+        for (std::size_t i = 0; i < P; ++i) o[i] = op(o[i], a[i + P]);
     }
   }
 }
 
 // The planes [z0, z1) of out = the voxels of `in` and their 6 face neighbours (one face step).
 void face_dilate(const Layout& L, const word_t* in, word_t* out, std::size_t z0, std::size_t z1) {
+  const std::size_t W = L.W, P = L.P, ny = L.ny, nz = L.nz;
+  const std::uint64_t tail = L.tail;
   for (std::size_t z = z0; z < z1; ++z) {
-    const word_t* const a = in + z * L.P;
-    word_t* const o = out + z * L.P;
-    for (std::size_t y = 0; y < L.ny; ++y) x_row<false>(a + y * L.W, o + y * L.W, L.W, L.tail);
-    for (std::size_t i = L.W; i < L.P; ++i) o[i] |= a[i - L.W];
-    for (std::size_t i = 0; i + L.W < L.P; ++i) o[i] |= a[i + L.W];
+    const word_t* const a = in + z * P;
+    word_t* const o = out + z * P;
+    for (std::size_t y = 0; y < ny; ++y) x_row<false>(a + y * W, o + y * W, W, tail);
+    for (std::size_t i = W; i < P; ++i) o[i] |= a[i - W];
+    for (std::size_t i = 0; i + W < P; ++i) o[i] |= a[i + W];
     if (z > 0)
-      for (std::size_t i = 0; i < L.P; ++i) o[i] |= a[i - L.P];
-    if (z + 1 < L.nz)
-      for (std::size_t i = 0; i < L.P; ++i) o[i] |= a[i + L.P];
+      for (std::size_t i = 0; i < P; ++i) o[i] |= a[i - P];
+    if (z + 1 < nz)
+      for (std::size_t i = 0; i < P; ++i) o[i] |= a[i + P];
   }
 }
 
@@ -114,8 +119,9 @@ void apply_surface_band(std::uint8_t* st, const Dims& dims, const Params& params
   const int t = params.threads;
   // c: the free voxels, u: the unknown ones, row by row.
   planes(L, t, [&](std::size_t z0, std::size_t z1) {
-    for (std::size_t row = z0 * L.ny; row < z1 * L.ny; ++row)
-      k.refine.pack_states(st + row * L.nx, L.nx, u + row * L.W, c + row * L.W);
+    const std::size_t nx = L.nx, W = L.W;
+    for (std::size_t row = z0 * L.ny, e = z1 * L.ny; row < e; ++row)
+      k.refine.pack_states(st + row * nx, nx, u + row * W, c + row * W);
   });
   // The thin free voxels: c without the opening of c by the 3 x 3 x 3 cube (into b).
   planes(L, t, [&](std::size_t z0, std::size_t z1) { box_axis<true>(L, c, a, 0, z0, z1); });
@@ -125,7 +131,7 @@ void apply_surface_band(std::uint8_t* st, const Dims& dims, const Params& params
   planes(L, t, [&](std::size_t z0, std::size_t z1) { box_axis<false>(L, b, a, 1, z0, z1); });
   planes(L, t, [&](std::size_t z0, std::size_t z1) {
     box_axis<false>(L, a, b, 2, z0, z1);  // b: the opening
-    for (std::size_t i = z0 * L.P; i < z1 * L.P; ++i) c[i] &= ~b[i];
+    for (std::size_t i = z0 * L.P, e = z1 * L.P; i < e; ++i) c[i] &= ~b[i];
   });
   // Within r face steps of an unknown voxel (u, then a, b in turn), then of an occupied one. The
   // states are still as they came in: there is no cascade.
@@ -135,21 +141,23 @@ void apply_surface_band(std::uint8_t* st, const Dims& dims, const Params& params
       std::swap(m, other);
     }
     planes(L, t, [&](std::size_t z0, std::size_t z1) {
-      for (std::size_t i = z0 * L.P; i < z1 * L.P; ++i) c[i] &= m[i];
+      for (std::size_t i = z0 * L.P, e = z1 * L.P; i < e; ++i) c[i] &= m[i];
     });
   };
   near(u, a);
   planes(L, t, [&](std::size_t z0, std::size_t z1) {
-    for (std::size_t row = z0 * L.ny; row < z1 * L.ny; ++row)
-      k.refine.pack_equal(st + row * L.nx, L.nx, kOccupied, a + row * L.W);
+    const std::size_t nx = L.nx, W = L.W;
+    for (std::size_t row = z0 * L.ny, e = z1 * L.ny; row < e; ++row)
+      k.refine.pack_equal(st + row * nx, nx, kOccupied, a + row * W);
   });
   near(a, b);
   if (added) added->assign(c, c + n);
   planes(L, t, [&](std::size_t z0, std::size_t z1) {
-    for (std::size_t row = z0 * L.ny; row < z1 * L.ny; ++row) {
-      std::uint8_t* const s = st + row * L.nx;
-      for (std::size_t w = 0; w < L.W; ++w)
-        for (std::uint64_t bits = c[row * L.W + w]; bits; bits &= bits - 1)
+    const std::size_t nx = L.nx, W = L.W;
+    for (std::size_t row = z0 * L.ny, e = z1 * L.ny; row < e; ++row) {
+      std::uint8_t* const s = st + row * nx;
+      for (std::size_t w = 0; w < W; ++w)
+        for (std::uint64_t bits = c[row * W + w]; bits; bits &= bits - 1)
           s[w * 64 + static_cast<std::size_t>(__builtin_ctzll(bits))] = kOccupied;
     }
   });
