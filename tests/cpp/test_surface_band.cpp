@@ -7,6 +7,7 @@
 #include <functional>
 #include <random>
 
+#include "isa_levels.hpp"
 #include "occseg/error.hpp"
 #include "occseg/segment.hpp"
 #include "reference/reference.hpp"
@@ -157,10 +158,13 @@ TEST(SurfaceBand, MatchesAVoxelByVoxelStatement) {
           ASSERT_EQ(bit, st[i] != got[i]) << i;
         }
         p.threads = 3;
-        std::vector<std::uint8_t> three = st;
-        std::vector<std::uint8_t> scratch(surface_band_scratch_bytes(d) + 64);
-        apply_surface_band(three.data(), d, p, scratch.data(), scratch.size());
-        ASSERT_EQ(three, want);
+        std::vector<std::uint64_t> scratch(surface_band_scratch_bytes(d) / 8 + 8);
+        testing_isa::for_each_isa([&](kernels::Isa level) {  // the row packing's kernels, every level
+          std::vector<std::uint8_t> three = st;
+          apply_surface_band(three.data(), d, p, reinterpret_cast<std::uint8_t*>(scratch.data()), scratch.size() * 8,
+                             nullptr, kernels::active());
+          ASSERT_EQ(three, want) << kernels::isa_name(level);
+        });
       }
 }
 
