@@ -5,10 +5,12 @@ simulated scenes: the columns of docs/experiments.md, "Objects, speckles, pocket
 usage: scripts/scene-report.py [--build build] [--work DIR] [--real-only | --sim-only] [--sim-dims NX NY NZ]
                                [--before NAME=VALUE,...]
 
-"before" is the default preset with the three rules off (object_gap=0, min_object_voxels=0,
-min_pocket_voxels=0: the labels of the default preset before the rules); "after" is the default
-preset as it is. `--before structure_planes=0` compares with the default preset without rule 10
-instead (docs/experiments.md, "Structure and objects"). Real files are read from ../shared/data/ (relative to the repository root)."""
+"before" is the default preset with the rules off (object_gap=0, min_object_voxels=0,
+min_pocket_voxels=0, surface_band=0, structure_planes=0: the labels of the default preset before the rules); "after"
+is the default preset as it is. `--before surface_band=0` compares with the default preset
+without the surface band (rule 10), `--before structure_planes=0` without rule 11
+(docs/experiments.md, "The surface band", "Structure and objects"). Real files are read from
+../shared/data/ (relative to the repository root)."""
 import argparse
 import json
 import os
@@ -18,7 +20,8 @@ import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DATA = os.path.join(os.path.dirname(ROOT), "shared", "data")
-OFF = ["--param", "object_gap=0", "--param", "min_object_voxels=0", "--param", "min_pocket_voxels=0"]
+OFF = ["--param", "object_gap=0", "--param", "min_object_voxels=0", "--param", "min_pocket_voxels=0",
+       "--param", "surface_band=0", "--param", "structure_planes=0"]
 REAL = [("geb079.bt (native 8 cm)", "geb079.bt", []),
         ("office1.pcd at 2 cm", "office1.pcd", ["--voxel-size", "0.02"]),
         ("table scene at 1 cm", "table_scene_mug_stereo_textured.pcd", ["--voxel-size", "0.01"]),
@@ -60,8 +63,8 @@ def table_columns(segments):
     }
 
 
-def segment(tool, path, extra, out):
-    run([tool, "segment", path, "--out", out, "--quiet", "--outputs", "labels.npy,segments.json"] + extra)
+def segment(tool, path, extra, out, outputs="segments.json"):
+    run([tool, "segment", path, "--out", out, "--quiet", "--outputs", outputs] + extra)
     with open(os.path.join(out, "segments.json")) as f:
         return json.load(f)["segments"]
 
@@ -98,7 +101,8 @@ def simulated(tool, work, dims, before=OFF):
         rows = []
         for label, params in (("before", before), ("after", [])):
             out = os.path.join(work, "seg-" + scene + "-" + label)
-            segs = segment(tool, os.path.join(truth, "map.npy"), ["--voxel-size", "0.04"] + params, out)
+            segs = segment(tool, os.path.join(truth, "map.npy"), ["--voxel-size", "0.04"] + params, out,
+                           "labels.npy,segments.json")
             s = score(tool, truth, os.path.join(out, "labels.npy"), os.path.join(out, "segments.json"))
             rows.append((label, s, table_columns(segs)))
         rows.append(("baseline", score(tool, truth, method="baseline"), None))

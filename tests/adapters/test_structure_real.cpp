@@ -1,4 +1,4 @@
-// Rule 10 (structure and objects) on the real OctoMap corridor ../shared/data/geb079.bt (8 cm):
+// Rule 11 (structure and objects) on the real OctoMap corridor ../shared/data/geb079.bt (8 cm):
 // its two long corridor walls and its floor are structure, not objects, and the scene table stays
 // within issue 23's bounds.
 #include <gtest/gtest.h>

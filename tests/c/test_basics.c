@@ -93,11 +93,11 @@ static void param_table(void **state) {
   double lo = -1, hi = -1;
   static const char *const names[] = {"preset", "smax", "smin", "split_ratio", "contrast_bins", "free_below",
                                       "occupied_above", "lookahead", "refine_passes", "gap_radius", "occupied_connectivity", "support_plane",
-                                      "object_gap", "min_object_voxels", "min_pocket_voxels", "structure_planes",
-                                      "structure_extent", "threads",
+                                      "object_gap", "min_object_voxels", "min_pocket_voxels", "surface_band",
+                                      "structure_planes", "structure_extent", "threads",
                                       "texture", "similarity"};
   (void)state;
-  assert_int_equal(n, 20); /* built-in parameters only: this suite loads no plugin */
+  assert_int_equal(n, 21); /* built-in parameters only: this suite loads no plugin */
   for (i = 0; i < n; ++i) {
     assert_string_equal(occseg_param_name(i), names[i]);
     assert_true(strlen(occseg_param_description(i)) > 10);

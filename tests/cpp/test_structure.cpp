@@ -1,4 +1,4 @@
-// Rule 10 (rules/structure.hpp): several planes per segment are structure, what stands on or
+// Rule 11 (rules/structure.hpp): several planes per segment are structure, what stands on or
 // against them is split off as objects, and coplanar fragments of a surface join it. Hand-built
 // maps whose answer is known voxel by voxel.
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Rule 10 (structure and objects) on the simulated table scene at its full size (320 x 320 x 128,
+// Rule 11 (structure and objects) on the simulated table scene at its full size (320 x 320 x 128,
 // 4 cm, seed 1): the top, seen only edge-on by the planar scans, lies in pieces with free voxels
 // between them (9 occupied segments on the table without the rule, 8 of them clutter); the pieces
 // lie in the plane of the top and join it.

@@ -46,6 +46,11 @@ struct Params {
   int object_gap = 4;
   int min_object_voxels = 64;
   int min_pocket_voxels = 64;
+  // default preset only (rules/surface_band.hpp; 0: off, as in the paper preset): a free voxel in
+  // thin free space (no 3 x 3 x 3 cube of free voxels holds it) within surface_band face steps of
+  // an occupied voxel and of an unknown one becomes occupied: the band of free voxels the range
+  // noise leaves just inside an object's surface goes to the object.
+  int surface_band = 2;
   // default preset only (rules/structure.hpp; 0: off, as in the paper preset): up to
   // structure_planes planes are searched in each occupied segment that no single support plane
   // holds half of; a plane whose voxels (at least support_plane of them) span structure_extent

@@ -43,6 +43,7 @@ Params Params::paper() {
   p.object_gap = 0;
   p.min_object_voxels = 0;
   p.min_pocket_voxels = 0;
+  p.surface_band = 0;
   p.structure_planes = 0;
   return p;
 }
@@ -66,8 +67,9 @@ const std::vector<ParamInfo>& param_table() {
       {"object_gap", "int", 0, 16, "default preset: occupied segments joined by a path of at most this many unknown voxels are one object; 0 = off"},
       {"min_object_voxels", "int", 0, 1e9, "default preset: occupied groups smaller than this join an object within object_gap + 1 voxels, else are clutter; 0 = off"},
       {"min_pocket_voxels", "int", 0, 1e9, "default preset: free regions smaller than this (not the main free space) become unknown, unknown ones this small next to an object join it; 0 = off"},
+      {"surface_band", "int", 0, 16, "default preset: free voxels in thin free space within this many face steps of an occupied and of an unknown voxel become occupied (the noisy band inside a surface); 0 = off"},
       {"structure_planes", "int", 0, 256, "default preset: planes searched per occupied segment; those spanning structure_extent both ways are structure (floor, walls, ceiling), what stands on or against them objects; 0 = off"},
-      {"structure_extent", "double", 0.001, 1e6, "default preset: metres a plane must span in both of its directions to be structure (rule 10)"},
+      {"structure_extent", "double", 0.001, 1e6, "default preset: metres a plane must span in both of its directions to be structure (rule 11)"},
       {"threads", "int", 0, 1024, "worker threads, 0 = all cores; results never depend on it"},
       {"texture", "string", 0, 0, "texture operator by name: auto (lbp8 when nz = 1, else lbp6), lbp6 (paper, 3D), lbp8 (3x3, 2D maps) or one a plugin adds"},
       {"similarity", "string", 0, 0, "histogram similarity of the division by name: g (eq. 1), chi2 or one a plugin adds"},
@@ -176,6 +178,7 @@ void Params::validate() const {
   check("object_gap", object_gap);
   check("min_object_voxels", min_object_voxels);
   check("min_pocket_voxels", min_pocket_voxels);
+  check("surface_band", surface_band);
   check("structure_planes", structure_planes);
   check("structure_extent", structure_extent);
   check("threads", threads);
@@ -225,6 +228,7 @@ void set_param(Params& p, const std::string& name, const std::string& value) {
   else if (name == "object_gap") p.object_gap = static_cast<int>(v);
   else if (name == "min_object_voxels") p.min_object_voxels = static_cast<int>(v);
   else if (name == "min_pocket_voxels") p.min_pocket_voxels = static_cast<int>(v);
+  else if (name == "surface_band") p.surface_band = static_cast<int>(v);
   else if (name == "structure_planes") p.structure_planes = static_cast<int>(v);
   else if (name == "structure_extent") p.structure_extent = v;
   else if (name == "threads") p.threads = static_cast<int>(v);
@@ -248,6 +252,7 @@ std::string get_param(const Params& p, const std::string& name) {
   else if (name == "object_gap") o << p.object_gap;
   else if (name == "min_object_voxels") o << p.min_object_voxels;
   else if (name == "min_pocket_voxels") o << p.min_pocket_voxels;
+  else if (name == "surface_band") o << p.surface_band;
   else if (name == "structure_planes") o << p.structure_planes;
   else if (name == "structure_extent") o << p.structure_extent;
   else if (name == "threads") o << p.threads;

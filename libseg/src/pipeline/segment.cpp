@@ -18,6 +18,7 @@
 #include "occseg/parallel.hpp"
 #include "rules/objects.hpp"
 #include "rules/planes.hpp"
+#include "rules/surface_band.hpp"
 #include "rules/structure.hpp"
 #include "stages/refine.hpp"
 #include "occseg/registry.hpp"
@@ -222,8 +223,12 @@ Result segment_into(const Grid& grid, const Params& requested, bool keep_stages,
   // growth's bit masks, then the rules': allocated apart, they raised the peak by 0.25 byte per
   // voxel.
   detail::refine(states.data(), own, grid.dims, params, scratch, room, &growth, k);
-  if (params.preset == Preset::default_preset)
+  std::vector<std::uint64_t> band;  // the voxels the surface band made occupied, for rule 7's sizes
+  if (params.preset == Preset::default_preset) {
     detail::apply_voxel_rules(states.data(), own, grid.dims, params, scratch, room, k);
+    apply_surface_band(states.data(), grid.dims, params, scratch, room, params.min_object_voxels > 0 ? &band : nullptr,
+                       k);
+  }
   if (!workspace) {  // not at the labelling's peak
     local.unknown_bits = std::vector<std::uint64_t>();
     local.occupied_bits = std::vector<std::uint64_t>();
@@ -235,8 +240,11 @@ Result segment_into(const Grid& grid, const Params& requested, bool keep_stages,
                            params.occupied_connectivity == 26, ws.run_starts, k);
   // Part of "labelling" for callers: they decide which regions are objects.
   if (params.preset == Preset::default_preset) {
-    group_objects(grid, r.labels, r.segments, params);
-    // Rule 10 before rule 5: a segment it makes structure (several planes) is not split again at
+    const std::vector<std::uint64_t> band_voxels =
+        surface_band_voxels(band, grid.dims, r.labels.data(), r.segments.size());
+    band = std::vector<std::uint64_t>();
+    group_objects(grid, r.labels, r.segments, params, &band_voxels);
+    // Rule 11 before rule 5: a segment it makes structure (several planes) is not split again at
     // its largest plane alone (which would cut the walls off a floor as objects standing on it).
     split_structure(grid, r.labels, r.segments, params, k);
     if (params.support_plane > 0)

@@ -62,9 +62,10 @@ std::size_t box_volume(const Segment& s) {
 
 class Grouper {
  public:
-  Grouper(const Grid& g, LabelArray& labels, std::vector<Segment>& segs, const Params& p)
+  Grouper(const Grid& g, LabelArray& labels, std::vector<Segment>& segs, const Params& p,
+          const std::vector<std::uint64_t>* band)
       : d_(g.dims), nx(d_.nx), ny(d_.ny), nz(d_.nz), sz(nx * ny), nx32_(static_cast<std::uint32_t>(nx)),
-        ny32_(static_cast<std::uint32_t>(ny)), labels_(labels), segs_(segs), p_(p),
+        ny32_(static_cast<std::uint32_t>(ny)), labels_(labels), segs_(segs), p_(p), band_(band),
         groups_(segs.size()), state_(segs.size()) {
     for (std::size_t s = 0; s < segs.size(); ++s) state_[s] = static_cast<std::uint8_t>(segs[s].state);
   }
@@ -386,10 +387,11 @@ class Grouper {
     for (const auto& sv : saved) labels_[sv.first] = sv.second;
   }
 
-  // Voxels per group (at the roots).
-  std::vector<std::uint64_t> group_sizes() {
+  // Voxels per group (at the roots); `evidence`: leaving out those the surface band added.
+  std::vector<std::uint64_t> group_sizes(bool evidence = false) {
     std::vector<std::uint64_t> size(segs_.size(), 0);
-    for (std::size_t s = 0; s < segs_.size(); ++s) size[groups_.find(static_cast<std::uint32_t>(s))] += segs_[s].voxels;
+    for (std::size_t s = 0; s < segs_.size(); ++s)
+      size[groups_.find(static_cast<std::uint32_t>(s))] += segs_[s].voxels - (evidence && band_ ? (*band_)[s] : 0);
     return size;
   }
 
@@ -397,7 +399,7 @@ class Grouper {
   // group never joins through another small one and the order of the groups changes nothing.
   void speckles() {
     const std::uint64_t min = minimum_size(p_.min_object_voxels, d_);
-    const std::vector<std::uint64_t> size = group_sizes();
+    const std::vector<std::uint64_t> size = group_sizes(/*evidence=*/true);
     std::vector<char> want(segs_.size(), 0);
     bool any = false;
     for (std::size_t s = 0; s < segs_.size(); ++s)
@@ -566,6 +568,7 @@ class Grouper {
   LabelArray& labels_;
   std::vector<Segment>& segs_;
   const Params& p_;
+  const std::vector<std::uint64_t>* band_;  // per old id: voxels the surface band added, or nullptr
   Groups groups_;
   std::vector<std::uint8_t> state_;  // per old id: its state (pockets read as unknown once chosen)
   std::vector<char> occ_, unk_;      // per old id: occupied, unknown (before rule 8)
@@ -585,9 +588,10 @@ class Grouper {
 
 }  // namespace
 
-void group_objects(const Grid& grid, LabelArray& labels, std::vector<Segment>& segments, const Params& params) {
+void group_objects(const Grid& grid, LabelArray& labels, std::vector<Segment>& segments, const Params& params,
+                   const std::vector<std::uint64_t>* band_voxels) {
   if (segments.size() < 2) return;
-  Grouper(grid, labels, segments, params).run();
+  Grouper(grid, labels, segments, params, band_voxels).run();
 }
 
 void assign_kinds(std::vector<Segment>& segments, const Params& params, const Dims& dims) {

@@ -28,7 +28,11 @@ namespace occseg {
 // visit of the unknown segments' and pockets' faces and the final relabelling pass run on
 // `params.threads` in fixed pieces, whose findings are taken in piece order; the groups are a
 // closure and do not depend on the order of the joins: the result never depends on the threads.
-void group_objects(const Grid& grid, LabelArray& labels, std::vector<Segment>& segments, const Params& params);
+// `band_voxels` (per segment id, or nullptr): voxels the surface band (rules/surface_band.hpp)
+// added, which rule 7 leaves out of a group's size: the band is inferred from the surface beside
+// it, so it never makes a fragment of surface an object of its own.
+void group_objects(const Grid& grid, LabelArray& labels, std::vector<Segment>& segments, const Params& params,
+                   const std::vector<std::uint64_t>* band_voxels = nullptr);
 
 // Each segment's kind from its state: free, unknown, and for occupied segments structure (when
 // the support-plane rule marked it so), clutter (fewer than params.min_object_voxels voxels) or

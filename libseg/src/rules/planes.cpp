@@ -646,7 +646,7 @@ void split_support_planes(const Grid& grid, LabelArray& labels, std::vector<Segm
   for (std::size_t s = 0; s < original; ++s) {
     const Segment& seg = segments[s];
     if (seg.state != State::occupied || seg.voxels < min_plane + kMinObjectVoxels) continue;
-    if (seg.kind == Kind::structure) continue;  // rule 10's: its planes and objects are found
+    if (seg.kind == Kind::structure) continue;  // rule 11's: its planes and objects are found
     // Temporary labels count down from the top of the id range; they must stay above every id.
     if (original + 2 * seg.voxels + 2 >= std::numeric_limits<std::uint32_t>::max()) continue;
     candidates.push_back(static_cast<std::uint32_t>(s));

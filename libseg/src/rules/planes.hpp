@@ -44,7 +44,7 @@ bool fit_dominant_plane(const std::vector<std::array<double, 3>>& points, std::u
                         std::size_t& inliers, int threads = 1, const kernels::Table& k = kernels::active(),
                         int axis = -1);
 
-// Splits every occupied segment (not already `structure`: rule 10, rules/structure.hpp, split it
+// Splits every occupied segment (not already `structure`: rule 11, rules/structure.hpp, split it
 // at several planes) with at least `min_plane` voxels whose dominant plane holds at
 // least `min_plane` of them and at least half of them. Pieces of the rest (connected as
 // `occupied26` says) that lie on the plane's open side (the side its voxels see free space on),

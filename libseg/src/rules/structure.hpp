@@ -1,4 +1,4 @@
-// Structure and objects (docs/algorithm.md, default preset rule 10): several planes per occupied
+// Structure and objects (docs/algorithm.md, default preset rule 11): several planes per occupied
 // segment. The support-plane rule (rules/planes.hpp) splits a segment that one plane holds half of;
 // a building's floor, walls and ceiling are one connected segment that no single plane holds half
 // of, with the furniture standing on and against them. This rule finds those planes, keeps them

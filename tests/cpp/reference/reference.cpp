@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <memory>
 
@@ -521,6 +522,42 @@ void label(const std::vector<std::uint8_t>& st, const Grid& g, LabelArray& label
   }
 }
 
+void apply_surface_band(std::vector<std::uint8_t>& st, const Dims& d, const Params& params) {
+  const int r = params.surface_band;
+  if (r <= 0) return;
+  const long nx = static_cast<long>(d.nx), ny = static_cast<long>(d.ny), nz = static_cast<long>(d.nz);
+  const auto at = [&](long x, long y, long z) { return static_cast<std::size_t>(x + nx * (y + ny * z)); };
+  const auto inside = [&](long x, long y, long z) { return x >= 0 && y >= 0 && z >= 0 && x < nx && y < ny && z < nz; };
+  const auto free_or_out = [&](long x, long y, long z) { return !inside(x, y, z) || st[at(x, y, z)] == 0; };
+  std::vector<std::size_t> band;
+  for (long z = 0; z < nz; ++z)
+    for (long y = 0; y < ny; ++y)
+      for (long x = 0; x < nx; ++x) {
+        if (st[at(x, y, z)] != 0) continue;
+        bool thick = false;  // some cube centred in the map at (cx, cy, cz) = (x, y, z) + (-1..1) all free
+        for (long cz = z - 1; cz <= z + 1 && !thick; ++cz)
+          for (long cy = y - 1; cy <= y + 1 && !thick; ++cy)
+            for (long cx = x - 1; cx <= x + 1 && !thick; ++cx) {
+              if (!inside(cx, cy, cz)) continue;
+              bool all = true;
+              for (long k = 0; k < 27 && all; ++k) all = free_or_out(cx - 1 + k % 3, cy - 1 + (k / 3) % 3, cz - 1 + k / 9);
+              thick = all;
+            }
+        if (thick) continue;
+        bool occupied = false, unknown = false;
+        for (long dz = -r; dz <= r; ++dz)
+          for (long dy = -r; dy <= r; ++dy)
+            for (long dx = -r; dx <= r; ++dx) {
+              if (std::labs(dx) + std::labs(dy) + std::labs(dz) > r || !inside(x + dx, y + dy, z + dz)) continue;
+              const std::uint8_t s = st[at(x + dx, y + dy, z + dz)];
+              occupied |= s == 2;
+              unknown |= s == 1;
+            }
+        if (occupied && unknown) band.push_back(at(x, y, z));
+      }
+  for (const std::size_t i : band) st[i] = 2;
+}
+
 Output segment(const Grid& grid, const Params& params) {
   Output o;
   const TextureMap tex = reference::texture(grid, params.contrast_bins);
@@ -529,7 +566,10 @@ Output segment(const Grid& grid, const Params& params) {
   std::vector<std::uint8_t> st = o.created;
   reference::refine_unknown(st, grid, params);
   reference::refine_boundaries(st, grid, params);
-  if (params.preset == Preset::default_preset) reference::apply_voxel_rules(st, grid, params);
+  if (params.preset == Preset::default_preset) {
+    reference::apply_voxel_rules(st, grid, params);
+    reference::apply_surface_band(st, grid.dims, params);
+  }
   o.refined = st;
   reference::label(st, grid, o.labels, o.segments, params.occupied_connectivity == 26);
   return o;

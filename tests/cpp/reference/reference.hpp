@@ -30,6 +30,10 @@ void refine_unknown(std::vector<std::uint8_t>& states, const Grid& grid, const P
 void refine_boundaries(std::vector<std::uint8_t>& states, const Grid& grid, const Params& params);
 // The default preset's per-voxel rules, with the opening done by per-line prefix sums.
 void apply_voxel_rules(std::vector<std::uint8_t>& states, const Grid& grid, const Params& params);
+// The default preset's surface band (rule 10), voxel by voxel: a free voxel no 3 x 3 x 3 cube of
+// free voxels centred in the map (its voxels outside the map counting as free) holds, with an occupied and an unknown voxel each
+// within params.surface_band face steps (taxicab distance), becomes occupied.
+void apply_surface_band(std::vector<std::uint8_t>& states, const Dims& dims, const Params& params);
 // Union-find labelling and the segment table, statistics summed in scan order; occupied voxels
 // 26-connected when `occupied26`, everything else 6-connected.
 void label(const std::vector<std::uint8_t>& states, const Grid& grid, LabelArray& labels,
