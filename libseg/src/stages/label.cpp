@@ -172,6 +172,60 @@ inline void for_each_run_in(const std::uint8_t* bits, std::size_t last, const st
     if (row[k - j0] == v) fn(k - j0);
 }
 
+// One run in a row's list of runs of its state: [x, e) along x, k its index in scan order.
+struct RunRef {
+  std::uint32_t x, e, k;
+};
+
+// The runs of one plane, row by row, each row's runs of each state apart and in order of x: two
+// rows are joined state by state, with no test of states.
+class PlaneRuns {
+ public:
+  void reset(std::size_t ny, std::size_t reserve) {
+    for (unsigned v = 0; v < 3; ++v) {
+      runs_[v].resize(reserve / 2);
+      off_[v].assign(ny + 1, 0);
+    }
+    clear();
+  }
+  void clear() { row_ = 0; }
+  // Room for a row of nx runs, then push() each run, then end_row().
+  void begin_row(std::size_t nx) {
+    for (unsigned v = 0; v < 3; ++v) {
+      const std::size_t n = off_[v][row_];
+      if (runs_[v].size() < n + nx) runs_[v].resize(std::max(2 * runs_[v].size(), n + nx));
+      at_[v] = runs_[v].data() + n;
+    }
+  }
+  void push(std::uint8_t v, std::uint32_t x, std::uint32_t e, std::uint32_t k) { *at_[v]++ = RunRef{x, e, k}; }
+  void end_row() {
+    ++row_;
+    for (unsigned v = 0; v < 3; ++v) off_[v][row_] = static_cast<std::uint32_t>(at_[v] - runs_[v].data());
+  }
+  const RunRef* begin(std::size_t y, unsigned v) const { return runs_[v].data() + off_[v][y]; }
+  const RunRef* end(std::size_t y, unsigned v) const { return runs_[v].data() + off_[v][y + 1]; }
+
+ private:
+  std::vector<RunRef> runs_[3];        // (their sizes are capacities)
+  std::vector<std::uint32_t> off_[3];  // row y's runs of state v: [off_[v][y], off_[v][y + 1])
+  RunRef* at_[3] = {nullptr, nullptr, nullptr};
+  std::size_t row_ = 0;
+};
+
+// Unites every run of [a, a1) with every run of [b, b1) it meets (both rows' runs of one state, in
+// order of x): along x they overlap (slack 0) or come within one voxel (slack 1, 26-connectivity).
+// Runs of one state in a row are a voxel apart at least, so a run ending first (or both, ending
+// together) meets no later run of the other row: one step per run.
+template <std::uint32_t slack>
+inline void join_rows(const RunRef* a, const RunRef* a1, const RunRef* b, const RunRef* b1, std::uint32_t* par) {
+  while (a < a1 && b < b1) {
+    if (a->x < b->e + slack && b->x < a->e + slack) unite(par, a->k, b->k);
+    const bool next_a = a->e <= b->e, next_b = b->e <= a->e;
+    a += next_a;
+    b += next_b;
+  }
+}
+
 struct SlotStats {  // one segment's share of one slab
   std::uint32_t id;
   std::uint64_t voxels = 0;
@@ -214,8 +268,10 @@ class Labelling {
       const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab);
       const std::size_t voxels = (ze - zb) * sz;
       // Every 4th row tells the runs' length well enough (either way gives the same result).
-      if (4 * 32 * k_.count_runs(s_ + zb * sz, (ze - zb) * ny, nx, 4) <= voxels) label_dense_slab(sl);
-      else label_sparse_slab(sl);
+      const std::size_t sampled = 4 * k_.count_runs(s_ + zb * sz, (ze - zb) * ny, nx, 4);
+      const bool dense = 32 * sampled <= voxels;
+      const std::size_t rows = (ze - zb) * ny;
+      label_slab(sl, dense ? rows + voxels / 32 : rows + sampled + sampled / 8, dense);
     });
   }
 
@@ -256,8 +312,9 @@ class Labelling {
   void segment_table(const float* p, std::vector<Segment>& segments, int threads);
 
  private:
-  void label_sparse_slab(std::size_t sl) __attribute__((noinline));
-  void label_dense_slab(std::size_t sl) __attribute__((noinline));
+  // Slab sl's runs in a table (`expected`: about how many), united and numbered there; the
+  // numbers stay in the table (dense) or go to the run starts in the label array (sparse).
+  void label_slab(std::size_t sl, std::size_t expected, bool dense) __attribute__((noinline));
   void join_plane(std::size_t sl);
   void slab_statistics(std::size_t sl, const float* p, detail::ThreadScratch<SlotStats>& out);
 
@@ -291,131 +348,74 @@ class Labelling {
   std::vector<std::uint8_t> state_of_;   // per segment id
 };
 
-void Labelling::label_sparse_slab(std::size_t sl) {
-  const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab);
+void Labelling::label_slab(std::size_t sl, std::size_t expected, bool dense) {
+  const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab), rows = (ze - zb) * ny;
+  std::vector<std::uint32_t> first(rows + 1);  // row r's runs: [first[r], first[r + 1]) in scan order
+  std::vector<std::uint32_t> par(expected);    // per run, in scan order: union-find parent (its size a capacity)
+  // The runs of this plane and of the plane below, by row and state.
+  PlaneRuns planes[2];
+  for (PlaneRuns& pr : planes) pr.reset(ny, expected / (ze - zb) + 64);
+  const bool c26 = occupied26_;
   const std::size_t last = (ze * sz + 7) / 8;  // the slab's run-start bits: bytes before `last`
-  const std::uint8_t* const s = s_;
-  std::uint32_t* const lab = lab_;
   std::uint8_t* const bits = starts_.data();
-  for (std::size_t z = zb; z < ze; ++z)
+  std::uint32_t k = 0;  // runs so far
+  for (std::size_t z = zb; z < ze; ++z) {
+    PlaneRuns& cur = planes[(z - zb) % 2];
+    const PlaneRuns& below = planes[(z - zb + 1) % 2];
+    cur.clear();
     for (std::size_t y = 0; y < ny; ++y) {
       const std::size_t i0 = nx * (y + ny * z);
-      const std::uint8_t* row = s + i0;
+      const std::uint8_t* row = s_ + i0;
       k_.row_starts(row, nx, bits, i0);
+      first[(z - zb) * ny + y] = k;
+      if (par.size() < k + nx) par.resize(std::max(2 * par.size(), k + nx));
+      cur.begin_row(nx);
       StartsIn runs(bits, i0 + 1, i0 + nx, last);
       for (std::size_t x = 0; x < nx;) {
         const std::size_t e = runs.next() - i0;
-        const auto rs = static_cast<std::uint32_t>(i0 + x);
-        lab[rs] = rs;
-        const std::uint8_t v = row[x];
-        auto with = [&](std::size_t other0) {  // unites with the run starting at other0 + j
-          return [&, other0](std::size_t j) { unite(lab, rs, static_cast<std::uint32_t>(other0 + j)); };
-        };
-        if (occupied26_ && v == kOccupiedState) {
-          // Neighbours before this run in scan order: row y-1 of this plane and rows y-1..y+1
-          // of the plane below, each one voxel wider on both sides.
-          const std::size_t lo = x > 0 ? x - 1 : 0, hi = std::min(nx, e + 1);
-          if (y > 0) for_each_run_in(bits, last, row - nx, i0 - nx, v, lo, hi, with(i0 - nx));
-          if (z > zb)
-            for (std::size_t yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < ny; ++yy) {
-              const std::size_t j0 = nx * (yy + ny * (z - 1));
-              for_each_run_in(bits, last, s + j0, j0, v, lo, hi, with(j0));
-            }
-        } else {
-          if (y > 0) for_each_run_in(bits, last, row - nx, i0 - nx, v, x, e, with(i0 - nx));
-          if (z > zb) for_each_run_in(bits, last, row - sz, i0 - sz, v, x, e, with(i0 - sz));
-        }
+        cur.push(row[x], static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(e), k);
+        par[k] = k;
+        ++k;
         x = e;
       }
-    }
-  // Local numbering: a run start's parent is a smaller run start of the slab, already
-  // renumbered (the parent entries are being overwritten in index order). The run starts are
-  // found in their bits, not by scanning the states again.
-  std::uint32_t m = 0;
-  const std::size_t end = ze * sz;
-  StartsIn runs(bits, zb * sz, end, last);
-  for (std::size_t rs = runs.next(); rs < end; rs = runs.next()) {
-    const std::uint32_t par = lab[rs];
-    if (par == rs) local_state_[sl].push_back(s[rs]);
-    lab[rs] = par == rs ? m++ : lab[par];
-  }
-  local_count_[sl] = m;
-}
-
-void Labelling::label_dense_slab(std::size_t sl) {
-  const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab), rows = (ze - zb) * ny;
-  std::vector<std::uint32_t> first(rows + 1);  // row r's runs: [first[r], first[r + 1])
-  std::vector<std::uint32_t> rx, par;          // per run: start x, union-find parent
-  std::vector<std::uint8_t> rv;                // per run: state
-  const std::size_t expected = rows + (ze - zb) * sz / 32;  // this path's bound, give or take the sampling
-  rx.reserve(expected);
-  par.reserve(expected);
-  rv.reserve(expected);
-  const auto end_of = [&](std::uint32_t k, std::uint32_t row_end) -> std::size_t {
-    return k + 1 < row_end ? rx[k + 1] : nx;
-  };
-  // Runs [a0, a1) of this row against runs [b0, b1) of an earlier row: every pair of the same
-  // state whose x ranges overlap is united.
-  const auto join_overlapping = [&](std::uint32_t a0, std::uint32_t a1, std::uint32_t b0, std::uint32_t b1) {
-    std::uint32_t a = a0, b = b0;
-    while (a < a1 && b < b1) {
-      if (rv[a] == rv[b]) unite(par.data(), a, b);
-      const std::size_t ea = end_of(a, a1), eb = end_of(b, b1);
-      if (ea <= eb) ++a;
-      if (eb <= ea) ++b;
-    }
-  };
-  // Occupied runs [a0, a1) against the occupied runs of an earlier row [b0, b1) that meet
-  // [x - 1, e + 1): 26-connectivity across edges and corners.
-  const auto join_occupied26 = [&](std::uint32_t a0, std::uint32_t a1, std::uint32_t b0, std::uint32_t b1) {
-    std::uint32_t b = b0;
-    for (std::uint32_t a = a0; a < a1; ++a) {
-      if (rv[a] != kOccupiedState) continue;
-      const std::size_t lo = rx[a] > 0 ? rx[a] - 1 : 0, hi = std::min(nx, end_of(a, a1) + 1);
-      while (b < b1 && end_of(b, b1) <= lo) ++b;  // runs ending before lo never meet a later run
-      for (std::uint32_t c = b; c < b1 && rx[c] < hi; ++c)
-        if (rv[c] == kOccupiedState) unite(par.data(), a, c);
-    }
-  };
-  const std::size_t last = (ze * sz + 7) / 8;  // the slab's run-start bits: bytes before `last`
-  std::uint8_t* const bits = starts_.data();
-  for (std::size_t r = 0; r < rows; ++r) {
-    const std::size_t y = r % ny, z = zb + r / ny, i0 = nx * (y + ny * z);
-    const std::uint8_t* row = s_ + i0;
-    k_.row_starts(row, nx, bits, i0);
-    first[r] = static_cast<std::uint32_t>(rx.size());
-    StartsIn runs(bits, i0, i0 + nx, last);
-    for (std::size_t x = runs.next() - i0; x < nx; x = runs.next() - i0) {
-      par.push_back(static_cast<std::uint32_t>(rx.size()));
-      rx.push_back(static_cast<std::uint32_t>(x));
-      rv.push_back(row[x]);
-    }
-    const auto a0 = first[r], a1 = static_cast<std::uint32_t>(rx.size());
-    if (y > 0) {  // row y - 1 of this plane
-      if (occupied26_) join_occupied26(a0, a1, first[r - 1], a0);
-      join_overlapping(a0, a1, first[r - 1], a0);
-    }
-    if (z > zb) {  // the plane below: row y, and for occupied runs rows y - 1 and y + 1 too
-      const std::size_t q = r - ny;
-      join_overlapping(a0, a1, first[q], first[q + 1]);
-      if (occupied26_) {
-        join_occupied26(a0, a1, first[q], first[q + 1]);
-        if (y > 0) join_occupied26(a0, a1, first[q - 1], first[q]);
-        if (y + 1 < ny) join_occupied26(a0, a1, first[q + 1], first[q + 2]);
+      cur.end_row();
+      std::uint32_t* const pa = par.data();
+      for (unsigned v = 0; v < 3; ++v) {
+        const RunRef *a0 = cur.begin(y, v), *a1 = cur.end(y, v);
+        if (a0 == a1) continue;
+        if (c26 && v == kOccupiedState) {
+          // Occupied runs meet occupied runs across edges and corners: one voxel wider.
+          if (y > 0) join_rows<1>(a0, a1, cur.begin(y - 1, v), cur.end(y - 1, v), pa);
+          if (z > zb)
+            for (std::size_t yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < ny; ++yy)
+              join_rows<1>(a0, a1, below.begin(yy, v), below.end(yy, v), pa);
+        } else {
+          if (y > 0) join_rows<0>(a0, a1, cur.begin(y - 1, v), cur.end(y - 1, v), pa);
+          if (z > zb) join_rows<0>(a0, a1, below.begin(y, v), below.end(y, v), pa);
+        }
       }
     }
   }
-  first[rows] = static_cast<std::uint32_t>(rx.size());
+  first[rows] = k;
   // Local numbering in place: a run's parent is an earlier run of the slab, already renumbered
-  // (the entries are overwritten in index order). The numbers stay in the table.
+  // (the entries are overwritten in index order). The run starts, in the same order, are found
+  // in their bits: a root's state is read there, and a sparse slab's numbers go there.
   std::uint32_t m = 0;
-  for (std::uint32_t k = 0; k < first[rows]; ++k) {
-    if (par[k] == k) local_state_[sl].push_back(rv[k]);
-    par[k] = par[k] == k ? m++ : par[par[k]];
+  const std::size_t end = ze * sz;
+  StartsIn starts(bits, zb * sz, end, last);
+  std::uint32_t* const lab = lab_;
+  for (std::uint32_t j = 0; j < k; ++j) {
+    const std::size_t rs = starts.next();
+    const std::uint32_t pj = par[j];
+    if (pj == j) local_state_[sl].push_back(s_[rs]);
+    par[j] = pj == j ? m++ : par[pj];
+    if (!dense) lab[rs] = par[j];
   }
   local_count_[sl] = m;
-  row_first_[sl] = std::move(first);
-  run_local_[sl].assign(par.begin(), par.end());  // (par holds room for the most runs the path takes)
+  if (dense) {
+    row_first_[sl] = std::move(first);
+    run_local_[sl].assign(par.begin(), par.begin() + k);
+  }
 }
 
 // Unites the components of slab sl's first plane with those they touch in the plane below.
