@@ -181,9 +181,10 @@ struct RunRef {
 // rows are joined state by state, with no test of states.
 class PlaneRuns {
  public:
+  // `reserve`: the runs a plane is expected to hold (of any state).
   void reset(std::size_t ny, std::size_t reserve) {
     for (unsigned v = 0; v < 3; ++v) {
-      runs_[v].resize(reserve / 2);
+      runs_[v].resize(reserve);
       off_[v].assign(ny + 1, 0);
     }
     clear();
@@ -206,7 +207,7 @@ class PlaneRuns {
   const RunRef* end(std::size_t y, unsigned v) const { return runs_[v].data() + off_[v][y + 1]; }
 
  private:
-  std::vector<RunRef> runs_[3];        // (their sizes are capacities)
+  UninitVector<RunRef> runs_[3];       // (their sizes are capacities)
   std::vector<std::uint32_t> off_[3];  // row y's runs of state v: [off_[v][y], off_[v][y + 1])
   RunRef* at_[3] = {nullptr, nullptr, nullptr};
   std::size_t row_ = 0;
@@ -216,10 +217,10 @@ class PlaneRuns {
 // order of x): along x they overlap (slack 0) or come within one voxel (slack 1, 26-connectivity).
 // Runs of one state in a row are a voxel apart at least, so a run ending first (or both, ending
 // together) meets no later run of the other row: one step per run.
-template <std::uint32_t slack>
-inline void join_rows(const RunRef* a, const RunRef* a1, const RunRef* b, const RunRef* b1, std::uint32_t* par) {
+template <std::uint32_t slack, typename Unite>
+inline void join_rows(const RunRef* a, const RunRef* a1, const RunRef* b, const RunRef* b1, Unite&& unite_ab) {
   while (a < a1 && b < b1) {
-    if (a->x < b->e + slack && b->x < a->e + slack) unite(par, a->k, b->k);
+    if (a->x < b->e + slack && b->x < a->e + slack) unite_ab(a->k, b->k);
     const bool next_a = a->e <= b->e, next_b = b->e <= a->e;
     a += next_a;
     b += next_b;
@@ -248,21 +249,24 @@ class Labelling {
             std::uint32_t* lab, std::vector<std::uint8_t>& starts)
       : s_(s), k_(k), nx(g.dims.nx), ny(g.dims.ny), nz(g.dims.nz), sz(nx * ny),
         slabs((nz + kLabelSlab - 1) / kLabelSlab), occupied26_(occupied26), lab_(lab), starts_(starts),
-        local_count_(slabs, 0), local_state_(slabs), row_first_(slabs), run_local_(slabs) {}
+        local_count_(slabs, 0), local_state_(slabs), row_first_(slabs), run_local_(slabs),
+        plane_runs_(slabs) {}
 
   // 1. Each slab on its own: runs along x, united with the runs they touch in the rows before
-  // them in y and z (inside the slab), then numbered 0..m-1 by first voxel. Two ways, the same
-  // result:
+  // them in y and z (inside the slab), then numbered 0..m-1 by first voxel. The union-find is
+  // over the slab's runs by their index in scan order (4 bytes a run: in L1 or L2, where parents
+  // at the run starts in the label array, 3.2 MB per slab of 320 x 320, missed L2 at nearly every
+  // step). The runs of the plane and of the plane below are listed row by row and state by state
+  // (PlaneRuns), so two rows are joined state by state in a merge walk over their runs in x
+  // order, reading no state and testing none. The local numbers then go
   // - dense (slabs whose runs are 32 voxels long or more on average, such as the benchmark
-  //   scene's): the slab's runs in a table (start, state, union-find parent by the runs' dense
-  //   indices). A few thousand entries per slab stay in L1, where parents at the run starts in
-  //   the label array (3.2 MB per slab of 320 x 320) miss L2 at nearly every step; the runs of
-  //   two rows meet where their x ranges overlap, and both rows' runs are sorted by x, so a
-  //   merge-like walk finds every pair without reading the states of the row before.
-  // - sparse (shorter runs: noisy maps): the parents at the run starts in the label array, which
-  //   the label array holds anyway; a table of short runs (9 bytes each) would raise the peak
-  //   memory of a noisy map. Tables of runs 32 voxels long on average take 0.3 byte per voxel of
-  //   a slab, of the one or two slabs each thread has at a time.
+  //   scene's): to a table kept for the join and the statistics (4 bytes a run), which write no
+  //   label before the statistics;
+  // - sparse (shorter runs: noisy maps): to the run starts in the label array, which holds them
+  //   anyway: a table of short runs kept until the statistics would raise the peak memory of a
+  //   noisy map (0.6 byte per voxel of the default preset's). The lists of two planes and the
+  //   parents of a slab of runs 6 voxels long take about a byte per voxel of the slab, for the
+  //   one slab each thread has at a time.
   void label_slabs(int threads) {
     for_each_slab(slabs, threads, [&](std::size_t sl) {
       const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab);
@@ -342,6 +346,8 @@ class Labelling {
   // before the statistics: their numbers at the run starts would cost a read and a write of a
   // line of the label array every two runs or so.
   std::vector<std::vector<std::uint32_t>> row_first_, run_local_;
+  // Per slab: the runs of its first plane and of its last (for the join's lists).
+  std::vector<std::array<std::uint32_t, 2>> plane_runs_;
   std::vector<std::uint32_t> base_;      // per slab: the global index of its local component 0
   std::vector<std::uint32_t> parent_;    // the join's union-find, by global index
   std::vector<std::uint32_t> final_id_;  // per global index: the segment id
@@ -351,10 +357,10 @@ class Labelling {
 void Labelling::label_slab(std::size_t sl, std::size_t expected, bool dense) {
   const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab), rows = (ze - zb) * ny;
   std::vector<std::uint32_t> first(rows + 1);  // row r's runs: [first[r], first[r + 1]) in scan order
-  std::vector<std::uint32_t> par(expected);    // per run, in scan order: union-find parent (its size a capacity)
+  UninitVector<std::uint32_t> par(expected);   // per run, in scan order: union-find parent (its size a capacity)
   // The runs of this plane and of the plane below, by row and state.
   PlaneRuns planes[2];
-  for (PlaneRuns& pr : planes) pr.reset(ny, expected / (ze - zb) + 64);
+  for (PlaneRuns& pr : planes) pr.reset(ny, expected / (ze - zb) + nx);
   const bool c26 = occupied26_;
   const std::size_t last = (ze * sz + 7) / 8;  // the slab's run-start bits: bytes before `last`
   std::uint8_t* const bits = starts_.data();
@@ -380,23 +386,25 @@ void Labelling::label_slab(std::size_t sl, std::size_t expected, bool dense) {
       }
       cur.end_row();
       std::uint32_t* const pa = par.data();
+      const auto pa_unite = [pa](std::uint32_t a, std::uint32_t b) { unite(pa, a, b); };
       for (unsigned v = 0; v < 3; ++v) {
         const RunRef *a0 = cur.begin(y, v), *a1 = cur.end(y, v);
         if (a0 == a1) continue;
         if (c26 && v == kOccupiedState) {
           // Occupied runs meet occupied runs across edges and corners: one voxel wider.
-          if (y > 0) join_rows<1>(a0, a1, cur.begin(y - 1, v), cur.end(y - 1, v), pa);
+          if (y > 0) join_rows<1>(a0, a1, cur.begin(y - 1, v), cur.end(y - 1, v), pa_unite);
           if (z > zb)
             for (std::size_t yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < ny; ++yy)
-              join_rows<1>(a0, a1, below.begin(yy, v), below.end(yy, v), pa);
+              join_rows<1>(a0, a1, below.begin(yy, v), below.end(yy, v), pa_unite);
         } else {
-          if (y > 0) join_rows<0>(a0, a1, cur.begin(y - 1, v), cur.end(y - 1, v), pa);
-          if (z > zb) join_rows<0>(a0, a1, below.begin(y, v), below.end(y, v), pa);
+          if (y > 0) join_rows<0>(a0, a1, cur.begin(y - 1, v), cur.end(y - 1, v), pa_unite);
+          if (z > zb) join_rows<0>(a0, a1, below.begin(y, v), below.end(y, v), pa_unite);
         }
       }
     }
   }
   first[rows] = k;
+  plane_runs_[sl] = {first[ny], k - first[rows - ny]};
   // Local numbering in place: a run's parent is an earlier run of the slab, already renumbered
   // (the entries are overwritten in index order). The run starts, in the same order, are found
   // in their bits: a root's state is read there, and a sparse slab's numbers go there.
@@ -418,48 +426,46 @@ void Labelling::label_slab(std::size_t sl, std::size_t expected, bool dense) {
   }
 }
 
-// Unites the components of slab sl's first plane with those they touch in the plane below.
+// Unites the components of slab sl's first plane with those they touch in the plane below: both
+// planes listed by row and state, with the global index of each run's component, and joined row
+// by row as in a slab.
 void Labelling::join_plane(std::size_t sl) {
   const std::size_t z = sl * kLabelSlab;
   const std::size_t last_plane = (kLabelSlab - 1) * ny;  // first row of a full slab's last plane
-  const std::uint8_t* const s = s_;
-  const std::uint8_t* const bits = starts_.data();  // every slab's, all set by now
+  const std::uint8_t* const bits = starts_.data();        // every slab's, all set by now
   std::uint32_t* const parent = parent_.data();
-  const std::uint32_t above = base_[sl], below = base_[sl - 1];
-  for (std::size_t y = 0; y < ny; ++y) {
-    const std::size_t i0 = nx * (y + ny * z), j0 = i0 - sz;  // this row, the row below
-    const std::uint8_t *a = s + i0, *b = s + j0;
-    // Runs [xa, ea) of this row and [xb, eb) of the row below, stepped along together.
-    // (ka, kb: their indices in their rows.)
-    StartsIn runs_a(bits, i0 + 1, i0 + nx, starts_.size()), runs_b(bits, j0 + 1, j0 + nx, starts_.size());
-    std::size_t xa = 0, xb = 0, ea = runs_a.next() - i0, eb = runs_b.next() - j0, ka = 0, kb = 0;
-    while (true) {
-      if (a[xa] == b[xb])
-        unite_shared(parent, above + local_at(sl, y, i0, xa, ka), below + local_at(sl - 1, last_plane + y, j0, xb, kb));
-      const std::size_t e = std::min(ea, eb);
-      if (e == nx) break;
-      if (ea == e) xa = ea, ea = runs_a.next() - i0, ++ka;
-      if (eb == e) xb = eb, eb = runs_b.next() - j0, ++kb;
-    }
-    if (!occupied26_) continue;
-    // Occupied runs of this row also meet occupied voxels of rows y-1..y+1 below across edges
-    // and corners: one voxel wider on both sides.
-    StartsIn runs(bits, i0 + 1, i0 + nx, starts_.size());
-    for (std::size_t x = 0, ka = 0; x < nx; ++ka) {
-      const std::size_t e = runs.next() - i0;
-      if (a[x] == kOccupiedState) {
-        const std::uint32_t ga = above + local_at(sl, y, i0, x, ka);
-        const std::size_t lo = x > 0 ? x - 1 : 0, hi = std::min(nx, e + 1);
-        for (std::size_t yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < ny; ++yy) {
-          const std::size_t k0 = nx * (yy + ny * (z - 1));
-          for_each_run_in(bits, starts_.size(), s + k0, k0, kOccupiedState, lo, hi, [&](std::size_t j) {
-            unite_shared(parent, ga, below + local_at(sl - 1, last_plane + yy, k0, j));
-          });
-        }
+  PlaneRuns above, below;
+  const auto list = [&](PlaneRuns& pr, std::size_t slab, std::size_t zz, std::size_t row0, std::size_t runs) {
+    pr.reset(ny, runs + nx);
+    const std::uint32_t base = base_[slab];
+    for (std::size_t y = 0; y < ny; ++y) {
+      const std::size_t i0 = nx * (y + ny * zz);
+      const std::uint8_t* row = s_ + i0;
+      pr.begin_row(nx);
+      StartsIn runs(bits, i0 + 1, i0 + nx, starts_.size());
+      for (std::size_t x = 0, k = 0; x < nx; ++k) {
+        const std::size_t e = runs.next() - i0;
+        pr.push(row[x], static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(e),
+                base + local_at(slab, row0 + y, i0, x, k));
+        x = e;
       }
-      x = e;
+      pr.end_row();
     }
-  }
+  };
+  list(above, sl, z, 0, plane_runs_[sl][0]);
+  list(below, sl - 1, z - 1, last_plane, plane_runs_[sl - 1][1]);
+  const auto unite_at = [parent](std::uint32_t a, std::uint32_t b) { unite_shared(parent, a, b); };
+  for (std::size_t y = 0; y < ny; ++y)
+    for (unsigned v = 0; v < 3; ++v) {
+      const RunRef *a0 = above.begin(y, v), *a1 = above.end(y, v);
+      if (a0 == a1) continue;
+      if (occupied26_ && v == kOccupiedState) {
+        for (std::size_t yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < ny; ++yy)
+          join_rows<1>(a0, a1, below.begin(yy, v), below.end(yy, v), unite_at);
+      } else {
+        join_rows<0>(a0, a1, below.begin(y, v), below.end(y, v), unite_at);
+      }
+    }
 }
 
 void Labelling::segment_table(const float* p, std::vector<Segment>& segments, int threads) {
