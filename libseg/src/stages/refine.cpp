@@ -4,8 +4,9 @@
 // Along each of the six axis directions, at every free->occupied (occupied->free) boundary, the
 // voxels just beyond it that belong to the segment entered, up to `lookahead` of them (the
 // window), are examined by their own values, and some move to the segment before the boundary
-// by the paper's four cases: reassign_window(), their one statement, which every scan calls. The
-// scan resumes after the window, so that one boundary never sweeps through a whole segment.
+// by the paper's four cases: reassign_window() states them on a window's own states, and
+// window_moves() the same on their bits, which every scan calls. The scan resumes after the
+// window, so that one boundary never sweeps through a whole segment.
 // `refine_passes` passes of the six scans, in the order x+, x-, y+, y-, z+, z-.
 //
 // How the scans are laid out (they compute what the plain scans of tests/cpp/reference/ do):
