@@ -386,7 +386,9 @@ void Labelling::label_slab(std::size_t sl, std::size_t expected, bool dense) {
       }
       cur.end_row();
       std::uint32_t* const pa = par.data();
-      const auto pa_unite = [pa](std::uint32_t a, std::uint32_t b) { unite(pa, a, b); };
+      const auto pa_unite = [pa](std::uint32_t a, std::uint32_t b) {
+        if (pa[a] != pa[b]) unite(pa, a, b);  // (runs of one set often share their parent already)
+      };
       for (unsigned v = 0; v < 3; ++v) {
         const RunRef *a0 = cur.begin(y, v), *a1 = cur.end(y, v);
         if (a0 == a1) continue;
