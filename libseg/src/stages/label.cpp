@@ -358,6 +358,7 @@ void Labelling::label_slab(std::size_t sl, std::size_t expected, bool dense) {
   const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab), rows = (ze - zb) * ny;
   std::vector<std::uint32_t> first(rows + 1);  // row r's runs: [first[r], first[r + 1]) in scan order
   UninitVector<std::uint32_t> par(expected);   // per run, in scan order: union-find parent (its size a capacity)
+  UninitVector<std::uint8_t> rv(expected);     // per run, in scan order: state
   // The runs of this plane and of the plane below, by row and state.
   PlaneRuns planes[2];
   for (PlaneRuns& pr : planes) pr.reset(ny, expected / (ze - zb) + nx);
@@ -374,13 +375,17 @@ void Labelling::label_slab(std::size_t sl, std::size_t expected, bool dense) {
       const std::uint8_t* row = s_ + i0;
       k_.row_starts(row, nx, bits, i0);
       first[(z - zb) * ny + y] = k;
-      if (par.size() < k + nx) par.resize(std::max(2 * par.size(), k + nx));
+      if (par.size() < k + nx) {
+        par.resize(std::max(2 * par.size(), k + nx));
+        rv.resize(par.size());
+      }
       cur.begin_row(nx);
       StartsIn runs(bits, i0 + 1, i0 + nx, last);
       for (std::size_t x = 0; x < nx;) {
         const std::size_t e = runs.next() - i0;
         cur.push(row[x], static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(e), k);
         par[k] = k;
+        rv[k] = row[x];
         ++k;
         x = e;
       }
@@ -408,18 +413,19 @@ void Labelling::label_slab(std::size_t sl, std::size_t expected, bool dense) {
   first[rows] = k;
   plane_runs_[sl] = {first[ny], k - first[rows - ny]};
   // Local numbering in place: a run's parent is an earlier run of the slab, already renumbered
-  // (the entries are overwritten in index order). The run starts, in the same order, are found
-  // in their bits: a root's state is read there, and a sparse slab's numbers go there.
+  // (the entries are overwritten in index order). A sparse slab's numbers go to the run starts,
+  // found in the same order in their bits.
   std::uint32_t m = 0;
-  const std::size_t end = ze * sz;
-  StartsIn starts(bits, zb * sz, end, last);
-  std::uint32_t* const lab = lab_;
-  for (std::uint32_t j = 0; j < k; ++j) {
-    const std::size_t rs = starts.next();
+  const auto number = [&](std::uint32_t j) {
     const std::uint32_t pj = par[j];
-    if (pj == j) local_state_[sl].push_back(s_[rs]);
-    par[j] = pj == j ? m++ : par[pj];
-    if (!dense) lab[rs] = par[j];
+    if (pj == j) local_state_[sl].push_back(rv[j]);
+    return par[j] = pj == j ? m++ : par[pj];
+  };
+  if (dense) {
+    for (std::uint32_t j = 0; j < k; ++j) number(j);
+  } else {
+    StartsIn starts(bits, zb * sz, ze * sz, last);
+    for (std::uint32_t j = 0; j < k; ++j) lab_[starts.next()] = number(j);
   }
   local_count_[sl] = m;
   if (dense) {
