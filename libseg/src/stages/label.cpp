@@ -133,45 +133,6 @@ class StartsIn {
   std::uint64_t w_ = 0;
 };
 
-// Last set bit of `bits` at or before i; one is set in byte `first` or after it, and no byte
-// before `first` is read.
-inline std::size_t prev_start(const std::uint8_t* bits, std::size_t i, std::size_t first) {
-  std::size_t at = i / 8;
-  unsigned b = bits[at] & (0xFFu >> (7 - i % 8));
-  if (b) return 8 * at + static_cast<std::size_t>(31 - __builtin_clz(b));
-  for (; at >= first + 8; at -= 8) {  // bytes [at - 8, at)
-    std::uint64_t w;
-    std::memcpy(&w, bits + at - 8, sizeof w);
-    if (w) return 8 * (at - 8) + static_cast<std::size_t>(63 - __builtin_clzll(w));
-  }
-  while (!(b = bits[--at])) {
-  }
-  return 8 * at + static_cast<std::size_t>(31 - __builtin_clz(b));
-}
-
-// Set bits of `bits` in [b, e). With b a row's first voxel and e a run start: the run's index in
-// its row (the slab join looks the dense slabs' runs up by it; at most a row per call).
-inline std::size_t starts_between(const std::uint8_t* bits, std::size_t b, std::size_t e) {
-  std::size_t c = 0;
-  for (; b < e && b % 8; ++b) c += (bits[b / 8] >> (b % 8)) & 1u;
-  for (; b + 8 <= e; b += 8) c += static_cast<std::size_t>(__builtin_popcount(bits[b / 8]));
-  for (; b < e; ++b) c += (bits[b / 8] >> (b % 8)) & 1u;
-  return c;
-}
-
-// Calls fn(j) for the first voxel j of every run of state v that meets [lo, hi) in the row at
-// map index j0 (its states `row`, its run starts set in `bits`, read below byte `last`), in order:
-// one call per run (a run lies in one component).
-template <typename Fn>
-inline void for_each_run_in(const std::uint8_t* bits, std::size_t last, const std::uint8_t* row, std::size_t j0,
-                            std::uint8_t v, std::size_t lo, std::size_t hi, Fn&& fn) {
-  const std::size_t j = prev_start(bits, j0 + lo, j0 / 8) - j0;  // the run that holds lo
-  if (row[j] == v) fn(j);
-  StartsIn later(bits, j0 + lo + 1, j0 + hi, last);
-  for (std::size_t k = later.next(); k < j0 + hi; k = later.next())
-    if (row[k - j0] == v) fn(k - j0);
-}
-
 // One run in a row's list of runs of its state: [x, e) along x, k its index in scan order.
 struct RunRef {
   std::uint32_t x, e, k;
@@ -241,7 +202,7 @@ struct SlotStats {  // one segment's share of one slab
 //
 // The label array is written once, with the final labels: until then only the entry of each
 // run's first voxel is used (a run: a maximal stretch of one state along x within a row, which
-// lies in one component), as its union-find parent, then as its slab-local component number.
+// lies in one component) of a sparse slab, as its slab-local component number.
 // Filling every voxel's entry in the first steps would move the whole array twice more.
 class Labelling {
  public:
@@ -323,11 +284,9 @@ class Labelling {
   void slab_statistics(std::size_t sl, const float* p, detail::ThreadScratch<SlotStats>& out);
 
   // Local number of the run starting at voxel x of row r of slab sl (map index of the row: i0),
-  // the k-th run of its row (k: counted by the caller, or -1 for counting its run starts).
-  std::uint32_t local_at(std::size_t sl, std::size_t r, std::size_t i0, std::size_t x,
-                         std::size_t k = std::size_t(-1)) const {
+  // the k-th run of its row.
+  std::uint32_t local_at(std::size_t sl, std::size_t r, std::size_t i0, std::size_t x, std::size_t k) const {
     if (run_local_[sl].empty()) return lab_[i0 + x];
-    if (k == std::size_t(-1)) k = starts_between(starts_.data(), i0, i0 + x);
     return run_local_[sl][row_first_[sl][r] + k];
   }
 
