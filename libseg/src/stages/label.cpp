@@ -133,6 +133,38 @@ class StartsIn {
   std::uint64_t w_ = 0;
 };
 
+// The set bits of `bits` in [b, e), from the last (b a multiple of 8; no byte at or past
+// ceil(e / 8) is read). next() is called only while some are left.
+class StartsBack {
+ public:
+  StartsBack(const std::uint8_t* bits, std::size_t b, std::size_t e) : bits_(bits), first_(b / 8), at_((e + 7) / 8) {
+    load();
+    if (e < base_ + 64) w_ &= (std::uint64_t{1} << (e - base_)) - 1;  // (bits of the last byte past e)
+  }
+  std::size_t next() {
+    while (!w_) load();
+    const unsigned t = 63u - static_cast<unsigned>(__builtin_clzll(w_));
+    w_ &= ~(std::uint64_t{1} << t);
+    return base_ + t;
+  }
+
+ private:
+  // The (up to) 8 bytes before at_.
+  void load() {
+    const std::size_t n = std::min<std::size_t>(8, at_ - first_);
+    at_ -= n;
+    std::uint64_t w = 0;
+    std::memcpy(&w, bits_ + at_, n);  // little-endian: byte at_ + i is bits 8i..8i+7
+    w_ = w;
+    base_ = 8 * at_;
+  }
+
+  const std::uint8_t* bits_;
+  const std::size_t first_;
+  std::size_t at_, base_ = 0;
+  std::uint64_t w_ = 0;
+};
+
 // One run in a row's list of runs of its state: [x, e) along x, k its index in scan order.
 struct RunRef {
   std::uint32_t x, e, k;
@@ -316,8 +348,11 @@ class Labelling {
 void Labelling::label_slab(std::size_t sl, std::size_t expected, bool dense) {
   const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab), rows = (ze - zb) * ny;
   std::vector<std::uint32_t> first(rows + 1);  // row r's runs: [first[r], first[r + 1]) in scan order
-  UninitVector<std::uint32_t> par(expected);   // per run, in scan order: union-find parent (its size a capacity)
-  UninitVector<std::uint8_t> rv(expected);     // per run, in scan order: state
+  // Per run, in scan order: its union-find parent, in the slab's own stretch of the label array
+  // (a slab holds no more runs than voxels; the statistics overwrite it), and for a dense slab its
+  // state (the size a capacity).
+  std::uint32_t* const par = lab_ + zb * sz;
+  UninitVector<std::uint8_t> rv(dense ? expected : 0);
   // The runs of this plane and of the plane below, by row and state.
   PlaneRuns planes[2];
   for (PlaneRuns& pr : planes) pr.reset(ny, expected / (ze - zb) + nx);
@@ -334,22 +369,19 @@ void Labelling::label_slab(std::size_t sl, std::size_t expected, bool dense) {
       const std::uint8_t* row = s_ + i0;
       k_.row_starts(row, nx, bits, i0);
       first[(z - zb) * ny + y] = k;
-      if (par.size() < k + nx) {
-        par.resize(std::max(2 * par.size(), k + nx));
-        rv.resize(par.size());
-      }
+      if (dense && rv.size() < k + nx) rv.resize(std::max(2 * rv.size(), k + nx));
       cur.begin_row(nx);
       StartsIn runs(bits, i0 + 1, i0 + nx, last);
       for (std::size_t x = 0; x < nx;) {
         const std::size_t e = runs.next() - i0;
         cur.push(row[x], static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(e), k);
         par[k] = k;
-        rv[k] = row[x];
+        if (dense) rv[k] = row[x];
         ++k;
         x = e;
       }
       cur.end_row();
-      std::uint32_t* const pa = par.data();
+      std::uint32_t* const pa = par;
       const auto pa_unite = [pa](std::uint32_t a, std::uint32_t b) {
         if (pa[a] != pa[b]) unite(pa, a, b);  // (runs of one set often share their parent already)
       };
@@ -372,24 +404,30 @@ void Labelling::label_slab(std::size_t sl, std::size_t expected, bool dense) {
   first[rows] = k;
   plane_runs_[sl] = {first[ny], k - first[rows - ny]};
   // Local numbering in place: a run's parent is an earlier run of the slab, already renumbered
-  // (the entries are overwritten in index order). A sparse slab's numbers go to the run starts,
-  // found in the same order in their bits.
+  // (the entries are overwritten in index order).
   std::uint32_t m = 0;
-  const auto number = [&](std::uint32_t j) {
+  for (std::uint32_t j = 0; j < k; ++j) {
     const std::uint32_t pj = par[j];
-    if (pj == j) local_state_[sl].push_back(rv[j]);
-    return par[j] = pj == j ? m++ : par[pj];
-  };
-  if (dense) {
-    for (std::uint32_t j = 0; j < k; ++j) number(j);
-  } else {
-    StartsIn starts(bits, zb * sz, ze * sz, last);
-    for (std::uint32_t j = 0; j < k; ++j) lab_[starts.next()] = number(j);
+    if (pj == j && dense) local_state_[sl].push_back(rv[j]);
+    par[j] = pj == j ? m++ : par[pj];
+  }
+  if (!dense) {
+    // The numbers go to the run starts, found in their bits from the last: run j starts at voxel
+    // j of the slab or later, so its number overwrites no entry of a run before it, none read
+    // yet. Every run of a component has its state.
+    local_state_[sl].resize(m);
+    StartsBack starts(bits, zb * sz, ze * sz);
+    for (std::uint32_t j = k; j-- > 0;) {
+      const std::size_t rs = starts.next();
+      const std::uint32_t id = par[j];
+      local_state_[sl][id] = s_[rs];
+      lab_[rs] = id;
+    }
   }
   local_count_[sl] = m;
   if (dense) {
     row_first_[sl] = std::move(first);
-    run_local_[sl].assign(par.begin(), par.begin() + k);
+    run_local_[sl].assign(par, par + k);
   }
 }
 
