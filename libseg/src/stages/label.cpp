@@ -247,9 +247,9 @@ class Labelling {
 
   // 1. Each slab on its own: runs along x, united with the runs they touch in the rows before
   // them in y and z (inside the slab), then numbered 0..m-1 by first voxel. The union-find is
-  // over the slab's runs by their index in scan order (4 bytes a run: in L1 or L2, where parents
-  // at the run starts in the label array, 3.2 MB per slab of 320 x 320, missed L2 at nearly every
-  // step). The runs of the plane and of the plane below are listed row by row and state by state
+  // over the slab's runs by their index in scan order, its parents packed at the start of the
+  // slab's own stretch of the label array (4 bytes a run: in L1 or L2, where parents at the run
+  // starts, 3.2 MB per slab of 320 x 320, missed L2 at nearly every step). The runs of the plane and of the plane below are listed row by row and state by state
   // (PlaneRuns), so two rows are joined state by state in a merge walk over their runs in x
   // order, reading no state and testing none. The local numbers then go
   // - dense (slabs whose runs are 32 voxels long or more on average, such as the benchmark
@@ -257,9 +257,9 @@ class Labelling {
   //   label before the statistics;
   // - sparse (shorter runs: noisy maps): to the run starts in the label array, which holds them
   //   anyway: a table of short runs kept until the statistics would raise the peak memory of a
-  //   noisy map (0.6 byte per voxel of the default preset's). The lists of two planes and the
-  //   parents of a slab of runs 6 voxels long take about a byte per voxel of the slab, for the
-  //   one slab each thread has at a time.
+  //   noisy map (0.6 byte per voxel of the default preset's). The lists of two planes of runs 6
+  //   voxels long take about half a byte per voxel of a slab, for the one slab each thread has
+  //   at a time.
   void label_slabs(int threads) {
     for_each_slab(slabs, threads, [&](std::size_t sl) {
       const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab);
