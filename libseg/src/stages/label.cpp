@@ -133,43 +133,91 @@ class StartsIn {
   std::uint64_t w_ = 0;
 };
 
-// Last set bit of `bits` at or before i; one is set in byte `first` or after it, and no byte
-// before `first` is read.
-inline std::size_t prev_start(const std::uint8_t* bits, std::size_t i, std::size_t first) {
-  std::size_t at = i / 8;
-  unsigned b = bits[at] & (0xFFu >> (7 - i % 8));
-  if (b) return 8 * at + static_cast<std::size_t>(31 - __builtin_clz(b));
-  for (; at >= first + 8; at -= 8) {  // bytes [at - 8, at)
-    std::uint64_t w;
-    std::memcpy(&w, bits + at - 8, sizeof w);
-    if (w) return 8 * (at - 8) + static_cast<std::size_t>(63 - __builtin_clzll(w));
+// The set bits of `bits` in [b, e), from the last (b a multiple of 8; no byte at or past
+// ceil(e / 8) is read). next() is called only while some are left.
+class StartsBack {
+ public:
+  StartsBack(const std::uint8_t* bits, std::size_t b, std::size_t e) : bits_(bits), first_(b / 8), at_((e + 7) / 8) {
+    load();
+    if (e < base_ + 64) w_ &= (std::uint64_t{1} << (e - base_)) - 1;  // (bits of the last byte past e)
   }
-  while (!(b = bits[--at])) {
+  std::size_t next() {
+    while (!w_) load();
+    const unsigned t = 63u - static_cast<unsigned>(__builtin_clzll(w_));
+    w_ &= ~(std::uint64_t{1} << t);
+    return base_ + t;
   }
-  return 8 * at + static_cast<std::size_t>(31 - __builtin_clz(b));
-}
 
-// Set bits of `bits` in [b, e). With b a row's first voxel and e a run start: the run's index in
-// its row (the slab join looks the dense slabs' runs up by it; at most a row per call).
-inline std::size_t starts_between(const std::uint8_t* bits, std::size_t b, std::size_t e) {
-  std::size_t c = 0;
-  for (; b < e && b % 8; ++b) c += (bits[b / 8] >> (b % 8)) & 1u;
-  for (; b + 8 <= e; b += 8) c += static_cast<std::size_t>(__builtin_popcount(bits[b / 8]));
-  for (; b < e; ++b) c += (bits[b / 8] >> (b % 8)) & 1u;
-  return c;
-}
+ private:
+  // The (up to) 8 bytes before at_.
+  void load() {
+    const std::size_t n = std::min<std::size_t>(8, at_ - first_);
+    at_ -= n;
+    std::uint64_t w = 0;
+    std::memcpy(&w, bits_ + at_, n);  // little-endian: byte at_ + i is bits 8i..8i+7
+    w_ = w;
+    base_ = 8 * at_;
+  }
 
-// Calls fn(j) for the first voxel j of every run of state v that meets [lo, hi) in the row at
-// map index j0 (its states `row`, its run starts set in `bits`, read below byte `last`), in order:
-// one call per run (a run lies in one component).
-template <typename Fn>
-inline void for_each_run_in(const std::uint8_t* bits, std::size_t last, const std::uint8_t* row, std::size_t j0,
-                            std::uint8_t v, std::size_t lo, std::size_t hi, Fn&& fn) {
-  const std::size_t j = prev_start(bits, j0 + lo, j0 / 8) - j0;  // the run that holds lo
-  if (row[j] == v) fn(j);
-  StartsIn later(bits, j0 + lo + 1, j0 + hi, last);
-  for (std::size_t k = later.next(); k < j0 + hi; k = later.next())
-    if (row[k - j0] == v) fn(k - j0);
+  const std::uint8_t* bits_;
+  const std::size_t first_;
+  std::size_t at_, base_ = 0;
+  std::uint64_t w_ = 0;
+};
+
+// One run in a row's list of runs of its state: [x, e) along x, k its index in scan order.
+struct RunRef {
+  std::uint32_t x, e, k;
+};
+
+// The runs of one plane, row by row, each row's runs of each state apart and in order of x: two
+// rows are joined state by state, with no test of states.
+class PlaneRuns {
+ public:
+  // `reserve`: the runs a plane is expected to hold (of any state).
+  void reset(std::size_t ny, std::size_t reserve) {
+    for (unsigned v = 0; v < 3; ++v) {
+      runs_[v].resize(reserve);
+      off_[v].assign(ny + 1, 0);
+    }
+    clear();
+  }
+  void clear() { row_ = 0; }
+  // Room for a row of nx runs, then push() each run, then end_row().
+  void begin_row(std::size_t nx) {
+    for (unsigned v = 0; v < 3; ++v) {
+      const std::size_t n = off_[v][row_];
+      if (runs_[v].size() < n + nx) runs_[v].resize(std::max(2 * runs_[v].size(), n + nx));
+      at_[v] = runs_[v].data() + n;
+    }
+  }
+  void push(std::uint8_t v, std::uint32_t x, std::uint32_t e, std::uint32_t k) { *at_[v]++ = RunRef{x, e, k}; }
+  void end_row() {
+    ++row_;
+    for (unsigned v = 0; v < 3; ++v) off_[v][row_] = static_cast<std::uint32_t>(at_[v] - runs_[v].data());
+  }
+  const RunRef* begin(std::size_t y, unsigned v) const { return runs_[v].data() + off_[v][y]; }
+  const RunRef* end(std::size_t y, unsigned v) const { return runs_[v].data() + off_[v][y + 1]; }
+
+ private:
+  UninitVector<RunRef> runs_[3];       // (their sizes are capacities)
+  std::vector<std::uint32_t> off_[3];  // row y's runs of state v: [off_[v][y], off_[v][y + 1])
+  RunRef* at_[3] = {nullptr, nullptr, nullptr};
+  std::size_t row_ = 0;
+};
+
+// Unites every run of [a, a1) with every run of [b, b1) it meets (both rows' runs of one state, in
+// order of x): along x they overlap (slack 0) or come within one voxel (slack 1, 26-connectivity).
+// Runs of one state in a row are a voxel apart at least, so a run ending first (or both, ending
+// together) meets no later run of the other row: one step per run.
+template <std::uint32_t slack, typename Unite>
+inline void join_rows(const RunRef* a, const RunRef* a1, const RunRef* b, const RunRef* b1, Unite&& unite_ab) {
+  while (a < a1 && b < b1) {
+    if (a->x < b->e + slack && b->x < a->e + slack) unite_ab(a->k, b->k);
+    const bool next_a = a->e <= b->e, next_b = b->e <= a->e;
+    a += next_a;
+    b += next_b;
+  }
 }
 
 struct SlotStats {  // one segment's share of one slab
@@ -186,7 +234,7 @@ struct SlotStats {  // one segment's share of one slab
 //
 // The label array is written once, with the final labels: until then only the entry of each
 // run's first voxel is used (a run: a maximal stretch of one state along x within a row, which
-// lies in one component), as its union-find parent, then as its slab-local component number.
+// lies in one component) of a sparse slab, as its slab-local component number.
 // Filling every voxel's entry in the first steps would move the whole array twice more.
 class Labelling {
  public:
@@ -194,28 +242,33 @@ class Labelling {
             std::uint32_t* lab, std::vector<std::uint8_t>& starts)
       : s_(s), k_(k), nx(g.dims.nx), ny(g.dims.ny), nz(g.dims.nz), sz(nx * ny),
         slabs((nz + kLabelSlab - 1) / kLabelSlab), occupied26_(occupied26), lab_(lab), starts_(starts),
-        local_count_(slabs, 0), local_state_(slabs), row_first_(slabs), run_local_(slabs) {}
+        local_count_(slabs, 0), local_state_(slabs), row_first_(slabs), run_local_(slabs),
+        plane_runs_(slabs) {}
 
   // 1. Each slab on its own: runs along x, united with the runs they touch in the rows before
-  // them in y and z (inside the slab), then numbered 0..m-1 by first voxel. Two ways, the same
-  // result:
+  // them in y and z (inside the slab), then numbered 0..m-1 by first voxel. The union-find is
+  // over the slab's runs by their index in scan order, its parents packed at the start of the
+  // slab's own stretch of the label array (4 bytes a run: in L1 or L2, where parents at the run
+  // starts, 3.2 MB per slab of 320 x 320, missed L2 at nearly every step). The runs of the plane and of the plane below are listed row by row and state by state
+  // (PlaneRuns), so two rows are joined state by state in a merge walk over their runs in x
+  // order, reading no state and testing none. The local numbers then go
   // - dense (slabs whose runs are 32 voxels long or more on average, such as the benchmark
-  //   scene's): the slab's runs in a table (start, state, union-find parent by the runs' dense
-  //   indices). A few thousand entries per slab stay in L1, where parents at the run starts in
-  //   the label array (3.2 MB per slab of 320 x 320) miss L2 at nearly every step; the runs of
-  //   two rows meet where their x ranges overlap, and both rows' runs are sorted by x, so a
-  //   merge-like walk finds every pair without reading the states of the row before.
-  // - sparse (shorter runs: noisy maps): the parents at the run starts in the label array, which
-  //   the label array holds anyway; a table of short runs (9 bytes each) would raise the peak
-  //   memory of a noisy map. Tables of runs 32 voxels long on average take 0.3 byte per voxel of
-  //   a slab, of the one or two slabs each thread has at a time.
+  //   scene's): to a table kept for the join and the statistics (4 bytes a run), which write no
+  //   label before the statistics;
+  // - sparse (shorter runs: noisy maps): to the run starts in the label array, which holds them
+  //   anyway: a table of short runs kept until the statistics would raise the peak memory of a
+  //   noisy map (0.6 byte per voxel of the default preset's). The lists of two planes of runs 6
+  //   voxels long take about half a byte per voxel of a slab, for the one slab each thread has
+  //   at a time.
   void label_slabs(int threads) {
     for_each_slab(slabs, threads, [&](std::size_t sl) {
       const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab);
       const std::size_t voxels = (ze - zb) * sz;
       // Every 4th row tells the runs' length well enough (either way gives the same result).
-      if (4 * 32 * k_.count_runs(s_ + zb * sz, (ze - zb) * ny, nx, 4) <= voxels) label_dense_slab(sl);
-      else label_sparse_slab(sl);
+      const std::size_t sampled = 4 * k_.count_runs(s_ + zb * sz, (ze - zb) * ny, nx, 4);
+      const bool dense = 32 * sampled <= voxels;
+      const std::size_t rows = (ze - zb) * ny;
+      label_slab(sl, dense ? rows + voxels / 32 : rows + sampled + sampled / 8, dense);
     });
   }
 
@@ -256,17 +309,16 @@ class Labelling {
   void segment_table(const float* p, std::vector<Segment>& segments, int threads);
 
  private:
-  void label_sparse_slab(std::size_t sl) __attribute__((noinline));
-  void label_dense_slab(std::size_t sl) __attribute__((noinline));
+  // Slab sl's runs in a table (`expected`: about how many), united and numbered there; the
+  // numbers stay in the table (dense) or go to the run starts in the label array (sparse).
+  void label_slab(std::size_t sl, std::size_t expected, bool dense) __attribute__((noinline));
   void join_plane(std::size_t sl);
   void slab_statistics(std::size_t sl, const float* p, detail::ThreadScratch<SlotStats>& out);
 
   // Local number of the run starting at voxel x of row r of slab sl (map index of the row: i0),
-  // the k-th run of its row (k: counted by the caller, or -1 for counting its run starts).
-  std::uint32_t local_at(std::size_t sl, std::size_t r, std::size_t i0, std::size_t x,
-                         std::size_t k = std::size_t(-1)) const {
+  // the k-th run of its row.
+  std::uint32_t local_at(std::size_t sl, std::size_t r, std::size_t i0, std::size_t x, std::size_t k) const {
     if (run_local_[sl].empty()) return lab_[i0 + x];
-    if (k == std::size_t(-1)) k = starts_between(starts_.data(), i0, i0 + x);
     return run_local_[sl][row_first_[sl][r] + k];
   }
 
@@ -285,181 +337,140 @@ class Labelling {
   // before the statistics: their numbers at the run starts would cost a read and a write of a
   // line of the label array every two runs or so.
   std::vector<std::vector<std::uint32_t>> row_first_, run_local_;
+  // Per slab: the runs of its first plane and of its last (for the join's lists).
+  std::vector<std::array<std::uint32_t, 2>> plane_runs_;
   std::vector<std::uint32_t> base_;      // per slab: the global index of its local component 0
   std::vector<std::uint32_t> parent_;    // the join's union-find, by global index
   std::vector<std::uint32_t> final_id_;  // per global index: the segment id
   std::vector<std::uint8_t> state_of_;   // per segment id
 };
 
-void Labelling::label_sparse_slab(std::size_t sl) {
-  const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab);
+void Labelling::label_slab(std::size_t sl, std::size_t expected, bool dense) {
+  const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab), rows = (ze - zb) * ny;
+  std::vector<std::uint32_t> first(rows + 1);  // row r's runs: [first[r], first[r + 1]) in scan order
+  // Per run, in scan order: its union-find parent, in the slab's own stretch of the label array
+  // (a slab holds no more runs than voxels; the statistics overwrite it), and for a dense slab its
+  // state (the size a capacity).
+  std::uint32_t* const par = lab_ + zb * sz;
+  UninitVector<std::uint8_t> rv(dense ? expected : 0);
+  // The runs of this plane and of the plane below, by row and state.
+  PlaneRuns planes[2];
+  for (PlaneRuns& pr : planes) pr.reset(ny, expected / (ze - zb) + nx);
+  const bool c26 = occupied26_;
   const std::size_t last = (ze * sz + 7) / 8;  // the slab's run-start bits: bytes before `last`
-  const std::uint8_t* const s = s_;
-  std::uint32_t* const lab = lab_;
   std::uint8_t* const bits = starts_.data();
-  for (std::size_t z = zb; z < ze; ++z)
+  std::uint32_t k = 0;  // runs so far
+  for (std::size_t z = zb; z < ze; ++z) {
+    PlaneRuns& cur = planes[(z - zb) % 2];
+    const PlaneRuns& below = planes[(z - zb + 1) % 2];
+    cur.clear();
     for (std::size_t y = 0; y < ny; ++y) {
       const std::size_t i0 = nx * (y + ny * z);
-      const std::uint8_t* row = s + i0;
+      const std::uint8_t* row = s_ + i0;
       k_.row_starts(row, nx, bits, i0);
+      first[(z - zb) * ny + y] = k;
+      if (dense && rv.size() < k + nx) rv.resize(std::max(2 * rv.size(), k + nx));
+      cur.begin_row(nx);
       StartsIn runs(bits, i0 + 1, i0 + nx, last);
       for (std::size_t x = 0; x < nx;) {
         const std::size_t e = runs.next() - i0;
-        const auto rs = static_cast<std::uint32_t>(i0 + x);
-        lab[rs] = rs;
-        const std::uint8_t v = row[x];
-        auto with = [&](std::size_t other0) {  // unites with the run starting at other0 + j
-          return [&, other0](std::size_t j) { unite(lab, rs, static_cast<std::uint32_t>(other0 + j)); };
-        };
-        if (occupied26_ && v == kOccupiedState) {
-          // Neighbours before this run in scan order: row y-1 of this plane and rows y-1..y+1
-          // of the plane below, each one voxel wider on both sides.
-          const std::size_t lo = x > 0 ? x - 1 : 0, hi = std::min(nx, e + 1);
-          if (y > 0) for_each_run_in(bits, last, row - nx, i0 - nx, v, lo, hi, with(i0 - nx));
-          if (z > zb)
-            for (std::size_t yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < ny; ++yy) {
-              const std::size_t j0 = nx * (yy + ny * (z - 1));
-              for_each_run_in(bits, last, s + j0, j0, v, lo, hi, with(j0));
-            }
-        } else {
-          if (y > 0) for_each_run_in(bits, last, row - nx, i0 - nx, v, x, e, with(i0 - nx));
-          if (z > zb) for_each_run_in(bits, last, row - sz, i0 - sz, v, x, e, with(i0 - sz));
-        }
+        cur.push(row[x], static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(e), k);
+        par[k] = k;
+        if (dense) rv[k] = row[x];
+        ++k;
         x = e;
       }
-    }
-  // Local numbering: a run start's parent is a smaller run start of the slab, already
-  // renumbered (the parent entries are being overwritten in index order). The run starts are
-  // found in their bits, not by scanning the states again.
-  std::uint32_t m = 0;
-  const std::size_t end = ze * sz;
-  StartsIn runs(bits, zb * sz, end, last);
-  for (std::size_t rs = runs.next(); rs < end; rs = runs.next()) {
-    const std::uint32_t par = lab[rs];
-    if (par == rs) local_state_[sl].push_back(s[rs]);
-    lab[rs] = par == rs ? m++ : lab[par];
-  }
-  local_count_[sl] = m;
-}
-
-void Labelling::label_dense_slab(std::size_t sl) {
-  const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab), rows = (ze - zb) * ny;
-  std::vector<std::uint32_t> first(rows + 1);  // row r's runs: [first[r], first[r + 1])
-  std::vector<std::uint32_t> rx, par;          // per run: start x, union-find parent
-  std::vector<std::uint8_t> rv;                // per run: state
-  const std::size_t expected = rows + (ze - zb) * sz / 32;  // this path's bound, give or take the sampling
-  rx.reserve(expected);
-  par.reserve(expected);
-  rv.reserve(expected);
-  const auto end_of = [&](std::uint32_t k, std::uint32_t row_end) -> std::size_t {
-    return k + 1 < row_end ? rx[k + 1] : nx;
-  };
-  // Runs [a0, a1) of this row against runs [b0, b1) of an earlier row: every pair of the same
-  // state whose x ranges overlap is united.
-  const auto join_overlapping = [&](std::uint32_t a0, std::uint32_t a1, std::uint32_t b0, std::uint32_t b1) {
-    std::uint32_t a = a0, b = b0;
-    while (a < a1 && b < b1) {
-      if (rv[a] == rv[b]) unite(par.data(), a, b);
-      const std::size_t ea = end_of(a, a1), eb = end_of(b, b1);
-      if (ea <= eb) ++a;
-      if (eb <= ea) ++b;
-    }
-  };
-  // Occupied runs [a0, a1) against the occupied runs of an earlier row [b0, b1) that meet
-  // [x - 1, e + 1): 26-connectivity across edges and corners.
-  const auto join_occupied26 = [&](std::uint32_t a0, std::uint32_t a1, std::uint32_t b0, std::uint32_t b1) {
-    std::uint32_t b = b0;
-    for (std::uint32_t a = a0; a < a1; ++a) {
-      if (rv[a] != kOccupiedState) continue;
-      const std::size_t lo = rx[a] > 0 ? rx[a] - 1 : 0, hi = std::min(nx, end_of(a, a1) + 1);
-      while (b < b1 && end_of(b, b1) <= lo) ++b;  // runs ending before lo never meet a later run
-      for (std::uint32_t c = b; c < b1 && rx[c] < hi; ++c)
-        if (rv[c] == kOccupiedState) unite(par.data(), a, c);
-    }
-  };
-  const std::size_t last = (ze * sz + 7) / 8;  // the slab's run-start bits: bytes before `last`
-  std::uint8_t* const bits = starts_.data();
-  for (std::size_t r = 0; r < rows; ++r) {
-    const std::size_t y = r % ny, z = zb + r / ny, i0 = nx * (y + ny * z);
-    const std::uint8_t* row = s_ + i0;
-    k_.row_starts(row, nx, bits, i0);
-    first[r] = static_cast<std::uint32_t>(rx.size());
-    StartsIn runs(bits, i0, i0 + nx, last);
-    for (std::size_t x = runs.next() - i0; x < nx; x = runs.next() - i0) {
-      par.push_back(static_cast<std::uint32_t>(rx.size()));
-      rx.push_back(static_cast<std::uint32_t>(x));
-      rv.push_back(row[x]);
-    }
-    const auto a0 = first[r], a1 = static_cast<std::uint32_t>(rx.size());
-    if (y > 0) {  // row y - 1 of this plane
-      if (occupied26_) join_occupied26(a0, a1, first[r - 1], a0);
-      join_overlapping(a0, a1, first[r - 1], a0);
-    }
-    if (z > zb) {  // the plane below: row y, and for occupied runs rows y - 1 and y + 1 too
-      const std::size_t q = r - ny;
-      join_overlapping(a0, a1, first[q], first[q + 1]);
-      if (occupied26_) {
-        join_occupied26(a0, a1, first[q], first[q + 1]);
-        if (y > 0) join_occupied26(a0, a1, first[q - 1], first[q]);
-        if (y + 1 < ny) join_occupied26(a0, a1, first[q + 1], first[q + 2]);
+      cur.end_row();
+      std::uint32_t* const pa = par;
+      const auto pa_unite = [pa](std::uint32_t a, std::uint32_t b) {
+        if (pa[a] != pa[b]) unite(pa, a, b);  // (runs of one set often share their parent already)
+      };
+      for (unsigned v = 0; v < 3; ++v) {
+        const RunRef *a0 = cur.begin(y, v), *a1 = cur.end(y, v);
+        if (a0 == a1) continue;
+        if (c26 && v == kOccupiedState) {
+          // Occupied runs meet occupied runs across edges and corners: one voxel wider.
+          if (y > 0) join_rows<1>(a0, a1, cur.begin(y - 1, v), cur.end(y - 1, v), pa_unite);
+          if (z > zb)
+            for (std::size_t yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < ny; ++yy)
+              join_rows<1>(a0, a1, below.begin(yy, v), below.end(yy, v), pa_unite);
+        } else {
+          if (y > 0) join_rows<0>(a0, a1, cur.begin(y - 1, v), cur.end(y - 1, v), pa_unite);
+          if (z > zb) join_rows<0>(a0, a1, below.begin(y, v), below.end(y, v), pa_unite);
+        }
       }
     }
   }
-  first[rows] = static_cast<std::uint32_t>(rx.size());
+  first[rows] = k;
+  plane_runs_[sl] = {first[ny], k - first[rows - ny]};
   // Local numbering in place: a run's parent is an earlier run of the slab, already renumbered
-  // (the entries are overwritten in index order). The numbers stay in the table.
+  // (the entries are overwritten in index order).
   std::uint32_t m = 0;
-  for (std::uint32_t k = 0; k < first[rows]; ++k) {
-    if (par[k] == k) local_state_[sl].push_back(rv[k]);
-    par[k] = par[k] == k ? m++ : par[par[k]];
+  for (std::uint32_t j = 0; j < k; ++j) {
+    const std::uint32_t pj = par[j];
+    if (pj == j && dense) local_state_[sl].push_back(rv[j]);
+    par[j] = pj == j ? m++ : par[pj];
+  }
+  if (!dense) {
+    // The numbers go to the run starts, found in their bits from the last: run j starts at voxel
+    // j of the slab or later, so its number overwrites no entry of a run before it, none read
+    // yet. Every run of a component has its state.
+    local_state_[sl].resize(m);
+    StartsBack starts(bits, zb * sz, ze * sz);
+    for (std::uint32_t j = k; j-- > 0;) {
+      const std::size_t rs = starts.next();
+      const std::uint32_t id = par[j];
+      local_state_[sl][id] = s_[rs];
+      lab_[rs] = id;
+    }
   }
   local_count_[sl] = m;
-  row_first_[sl] = std::move(first);
-  run_local_[sl].assign(par.begin(), par.end());  // (par holds room for the most runs the path takes)
+  if (dense) {
+    row_first_[sl] = std::move(first);
+    run_local_[sl].assign(par, par + k);
+  }
 }
 
-// Unites the components of slab sl's first plane with those they touch in the plane below.
+// Unites the components of slab sl's first plane with those they touch in the plane below: both
+// planes listed by row and state, with the global index of each run's component, and joined row
+// by row as in a slab.
 void Labelling::join_plane(std::size_t sl) {
   const std::size_t z = sl * kLabelSlab;
   const std::size_t last_plane = (kLabelSlab - 1) * ny;  // first row of a full slab's last plane
-  const std::uint8_t* const s = s_;
-  const std::uint8_t* const bits = starts_.data();  // every slab's, all set by now
+  const std::uint8_t* const bits = starts_.data();        // every slab's, all set by now
   std::uint32_t* const parent = parent_.data();
-  const std::uint32_t above = base_[sl], below = base_[sl - 1];
-  for (std::size_t y = 0; y < ny; ++y) {
-    const std::size_t i0 = nx * (y + ny * z), j0 = i0 - sz;  // this row, the row below
-    const std::uint8_t *a = s + i0, *b = s + j0;
-    // Runs [xa, ea) of this row and [xb, eb) of the row below, stepped along together.
-    // (ka, kb: their indices in their rows.)
-    StartsIn runs_a(bits, i0 + 1, i0 + nx, starts_.size()), runs_b(bits, j0 + 1, j0 + nx, starts_.size());
-    std::size_t xa = 0, xb = 0, ea = runs_a.next() - i0, eb = runs_b.next() - j0, ka = 0, kb = 0;
-    while (true) {
-      if (a[xa] == b[xb])
-        unite_shared(parent, above + local_at(sl, y, i0, xa, ka), below + local_at(sl - 1, last_plane + y, j0, xb, kb));
-      const std::size_t e = std::min(ea, eb);
-      if (e == nx) break;
-      if (ea == e) xa = ea, ea = runs_a.next() - i0, ++ka;
-      if (eb == e) xb = eb, eb = runs_b.next() - j0, ++kb;
-    }
-    if (!occupied26_) continue;
-    // Occupied runs of this row also meet occupied voxels of rows y-1..y+1 below across edges
-    // and corners: one voxel wider on both sides.
-    StartsIn runs(bits, i0 + 1, i0 + nx, starts_.size());
-    for (std::size_t x = 0, ka = 0; x < nx; ++ka) {
-      const std::size_t e = runs.next() - i0;
-      if (a[x] == kOccupiedState) {
-        const std::uint32_t ga = above + local_at(sl, y, i0, x, ka);
-        const std::size_t lo = x > 0 ? x - 1 : 0, hi = std::min(nx, e + 1);
-        for (std::size_t yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < ny; ++yy) {
-          const std::size_t k0 = nx * (yy + ny * (z - 1));
-          for_each_run_in(bits, starts_.size(), s + k0, k0, kOccupiedState, lo, hi, [&](std::size_t j) {
-            unite_shared(parent, ga, below + local_at(sl - 1, last_plane + yy, k0, j));
-          });
-        }
+  PlaneRuns above, below;
+  const auto list = [&](PlaneRuns& pr, std::size_t slab, std::size_t zz, std::size_t row0, std::size_t runs) {
+    pr.reset(ny, runs + nx);
+    const std::uint32_t base = base_[slab];
+    for (std::size_t y = 0; y < ny; ++y) {
+      const std::size_t i0 = nx * (y + ny * zz);
+      const std::uint8_t* row = s_ + i0;
+      pr.begin_row(nx);
+      StartsIn runs(bits, i0 + 1, i0 + nx, starts_.size());
+      for (std::size_t x = 0, k = 0; x < nx; ++k) {
+        const std::size_t e = runs.next() - i0;
+        pr.push(row[x], static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(e),
+                base + local_at(slab, row0 + y, i0, x, k));
+        x = e;
       }
-      x = e;
+      pr.end_row();
     }
-  }
+  };
+  list(above, sl, z, 0, plane_runs_[sl][0]);
+  list(below, sl - 1, z - 1, last_plane, plane_runs_[sl - 1][1]);
+  const auto unite_at = [parent](std::uint32_t a, std::uint32_t b) { unite_shared(parent, a, b); };
+  for (std::size_t y = 0; y < ny; ++y)
+    for (unsigned v = 0; v < 3; ++v) {
+      const RunRef *a0 = above.begin(y, v), *a1 = above.end(y, v);
+      if (a0 == a1) continue;
+      if (occupied26_ && v == kOccupiedState) {
+        for (std::size_t yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < ny; ++yy)
+          join_rows<1>(a0, a1, below.begin(yy, v), below.end(yy, v), unite_at);
+      } else {
+        join_rows<0>(a0, a1, below.begin(y, v), below.end(y, v), unite_at);
+      }
+    }
 }
 
 void Labelling::segment_table(const float* p, std::vector<Segment>& segments, int threads) {

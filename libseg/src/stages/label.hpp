@@ -19,12 +19,12 @@ namespace occseg {
 // depends on this constant but never on the thread count (docs/algorithm.md).
 constexpr std::size_t kLabelSlab = 8;
 
-// Labels each connected region of equal state 0..N-1, numbered in the order of their first
-// voxel (x fastest), and fills `segments` (index = id). Regions are 6-connected; with
-// `occupied26`, occupied voxels also join across edges and corners (26-connectivity). Throws
-// Error(unsupported) beyond 2^32-1 voxels, since labels are uint32. `threads` as in Params
-// (0: all cores); results never depend on it, nor on the kernels `k` (every level gives the same
-// labels and segments, bit for bit).
+// Labels each connected region of equal state 0..N-1 (every state a value of occseg::State: 0, 1
+// or 2), numbered in the order of their first voxel (x fastest), and fills `segments` (index =
+// id). Regions are 6-connected; with `occupied26`, occupied voxels also join across edges and
+// corners (26-connectivity). Throws Error(unsupported) beyond 2^32-1 voxels, since labels are
+// uint32. `threads` as in Params (0: all cores); results never depend on it, nor on the kernels
+// `k` (every level gives the same labels and segments, bit for bit).
 void label_components(const std::vector<std::uint8_t>& states, const Grid& grid,
                       LabelArray& labels, std::vector<Segment>& segments, int threads = 0,
                       bool occupied26 = false, const kernels::Table& k = kernels::active());

@@ -4,8 +4,9 @@
 // Along each of the six axis directions, at every free->occupied (occupied->free) boundary, the
 // voxels just beyond it that belong to the segment entered, up to `lookahead` of them (the
 // window), are examined by their own values, and some move to the segment before the boundary
-// by the paper's four cases: reassign_window(), their one statement, which every scan calls. The
-// scan resumes after the window, so that one boundary never sweeps through a whole segment.
+// by the paper's four cases: reassign_window() states them on a window's own states, and
+// window_moves() the same on their bits, which every scan calls. The scan resumes after the
+// window, so that one boundary never sweeps through a whole segment.
 // `refine_passes` passes of the six scans, in the order x+, x-, y+, y-, z+, z-.
 //
 // How the scans are laid out (they compute what the plain scans of tests/cpp/reference/ do):
@@ -31,6 +32,7 @@ const ScanDirection kSixDirections[6] = {{0, +1}, {0, -1}, {1, +1}, {1, -1}, {2,
 namespace {
 
 using detail::OwnBits;
+using detail::word_t;
 
 constexpr std::uint8_t kFree = static_cast<std::uint8_t>(State::free);
 static_assert(static_cast<int>(State::unknown) == 1, "an unknown bit is the state's value");
@@ -68,29 +70,30 @@ void reassign_window(const std::uint8_t* own, int n, std::uint8_t from, bool* mo
   for (int k = 0; k < n; ++k) moves[k] = for_from && (!for_into || own[k] != into);
 }
 
-// reassign_window() on a window of the own states' bits, voxel k at pos(k) = (word index, bit);
-// false when nothing moves (moves[] then unwritten). The occupied bits come first: where they
-// show no voxel on `from`'s side (entering an object whose voxels are all occupied, or leaving one
-// into space with none), the window is case (i) or (ii) whatever its unknown bits, and they are
-// not read. That decides most windows.
-template <class Pos>
-bool reassign_window(const OwnBits& own, int n, std::uint8_t from, bool* moves, Pos&& pos) {
-  std::uint8_t occupied[kMaxLook];
-  bool any = false, all = true;
-  for (int k = 0; k < n; ++k) {
-    const auto [i, b] = pos(k);
-    occupied[k] = static_cast<std::uint8_t>((own.occupied[i] >> b) & 1u);
-    any = any || occupied[k];
-    all = all && occupied[k];
-  }
-  if (from == kFree ? all : !any) return false;
-  std::uint8_t win[kMaxLook];
-  for (int k = 0; k < n; ++k) {
-    const auto [i, b] = pos(k);
-    win[k] = occupied[k] ? kOccupied : static_cast<std::uint8_t>((own.unknown[i] >> b) & 1u);  // (kUnknown is 1)
-  }
-  reassign_window(win, n, from, moves);
-  return true;
+// reassign_window() on a window of the own states' bits, as masks of its n voxels (bit k: voxel
+// k; `all` the n bits): `occ` the voxels whose own state is occupied, `unk()` those whose own
+// state is unknown (read only when needed). Returns the voxels that move to `from`. The occupied
+// bits come first: where they show no voxel on `from`'s side (entering an object whose voxels are
+// all occupied, or leaving one into space with none), the window is case (i) or (ii) whatever its
+// unknown bits, and they are not read. That decides most windows.
+template <class Unknown>
+inline std::uint64_t window_moves(std::uint64_t occ, std::uint64_t all, std::uint8_t from, Unknown&& unk) {
+  if (from == kFree ? occ == all : occ == 0) return 0;
+  const std::uint64_t unknown = unk() & ~occ, free = all & ~occ & ~unknown;
+  const std::uint64_t for_from = from == kFree ? free : occ, for_into = from == kFree ? occ : free;
+  if (!for_from) return 0;                  // (i), (ii)
+  return for_into ? all & ~for_into : all;  // (iv) : (iii)
+}
+
+inline std::uint64_t low_bits(int n) { return n >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << n) - 1; }
+
+// Bits [x, x + n) of a bit row (n <= 64, x + n within the row), bit x first.
+inline std::uint64_t bit_field(const word_t* row, std::size_t x, int n) {
+  const std::size_t i = x / 64;
+  const unsigned b = x % 64;
+  std::uint64_t v = row[i] >> b;
+  if (b != 0 && b + static_cast<unsigned>(n) > 64) v |= row[i + 1] << (64 - b);
+  return v & low_bits(n);
 }
 
 // ---- Scans along x: one row at a time ----
@@ -102,18 +105,18 @@ void scan_row(std::uint8_t* st, const OwnBits& own, std::size_t r, std::size_t l
   if (!kr.any_boundary(st, st + 1, len - 1)) return;  // windows only ever start at a boundary
   const std::ptrdiff_t stride = step;
   std::uint8_t* first = step > 0 ? st : st + len - 1;
-  bool moves[kMaxLook];
   std::size_t q = 1;  // scan position: voxel q forward, len - 1 - q backward
+  const word_t* const occ_row = own.occupied + r * own.words;
+  const word_t* const unk_row = own.unknown + r * own.words;
   while ((q = kr.next_boundary(st, q, len, step)) < len) {
     std::uint8_t* c = first + static_cast<std::ptrdiff_t>(q) * stride;
     const std::uint8_t from = c[-stride];
     const int n = window_length(c, stride, len - q, look);
-    const bool some = reassign_window(own, n, from, moves, [&](int w) {
-      const std::size_t p = q + static_cast<std::size_t>(w), x = step > 0 ? p : len - 1 - p;
-      return std::pair<std::size_t, unsigned>(r * own.words + x / 64, static_cast<unsigned>(x % 64));
-    });
-    for (int w = 0; some && w < n; ++w)
-      if (moves[w]) c[w * stride] = from;
+    // The window in x order: voxels [xlo, xlo + n) of the row.
+    const std::size_t xlo = step > 0 ? q : len - q - static_cast<std::size_t>(n);
+    std::uint64_t moves = window_moves(bit_field(occ_row, xlo, n), low_bits(n), from,
+                                       [&] { return bit_field(unk_row, xlo, n); });
+    for (; moves; moves &= moves - 1) st[xlo + static_cast<std::size_t>(__builtin_ctzll(moves))] = from;
     q += static_cast<std::size_t>(n);  // resume after the window
   }
 }
@@ -139,21 +142,24 @@ inline Plane plane_shape(const Dims& d, int axis) {
 inline std::uint8_t plane_window(std::uint8_t* cur, const OwnBits& own, std::size_t orow, std::ptrdiff_t ors,
                                  std::size_t x, std::ptrdiff_t rs, std::size_t k, std::size_t rows, int look,
                                  std::uint8_t from, std::uint8_t* occ_k, std::ptrdiff_t fs) {
-  bool moves[kMaxLook];
   std::uint8_t* const c = cur + x;
   const int n = window_length(c, rs, rows - k, look);
   // (lane x: the same bit of every row's words)
   const std::size_t i0 = orow * own.words + x / 64;
   const std::ptrdiff_t di = ors * static_cast<std::ptrdiff_t>(own.words);
   const auto b = static_cast<unsigned>(x % 64);
-  const bool some = reassign_window(own, n, from, moves, [&](int w) {
-    return std::pair<std::size_t, unsigned>(static_cast<std::size_t>(static_cast<std::ptrdiff_t>(i0) + w * di), b);
-  });
-  for (int w = 0; some && w < n; ++w)
-    if (moves[w]) {
-      c[w * rs] = from;
-      if (from == kOccupied) occ_k[w * fs] = 1;
-    }
+  const auto lane = [&](const word_t* words) {
+    std::uint64_t m = 0;
+    for (int w = 0; w < n; ++w)
+      m |= ((words[static_cast<std::size_t>(static_cast<std::ptrdiff_t>(i0) + w * di)] >> b) & 1u) << w;
+    return m;
+  };
+  std::uint64_t moves = window_moves(lane(own.occupied), low_bits(n), from, [&] { return lane(own.unknown); });
+  for (; moves; moves &= moves - 1) {
+    const int w = __builtin_ctzll(moves);
+    c[w * rs] = from;
+    if (from == kOccupied) occ_k[w * fs] = 1;
+  }
   return static_cast<std::uint8_t>(n - 1);  // resume after the window
 }
 
