@@ -117,7 +117,7 @@ static void param_table(void **state) {
   assert_null(occseg_param_name(n));
   assert_null(occseg_param_kind(n));
   assert_null(occseg_param_description(UINT32_MAX));
-  EXPECT_FAIL(occseg_param_bounds(n, &lo, &hi), OCCSEG_ERANGE, "index 18 is out of range");
+  EXPECT_FAIL(occseg_param_bounds(n, &lo, &hi), OCCSEG_ERANGE, "index 21 is out of range");
   EXPECT_FAIL(occseg_param_bounds(0, NULL, &hi), OCCSEG_EINVAL, "'min'");
   EXPECT_FAIL(occseg_param_bounds(0, &lo, NULL), OCCSEG_EINVAL, "'max'");
   EXPECT_FAIL(occseg_param_find("nope", &idx), OCCSEG_EINVAL, "parameter 'nope': no such parameter");
