@@ -119,8 +119,12 @@ class Structure {
       }
     }
     for (std::size_t c = 0; c < candidates.size(); ++c) {
-      if (bucket.empty()) list_members(candidates[c], members_);
-      else members_.assign(bucket.begin() + std::ptrdiff_t(start[c]), bucket.begin() + std::ptrdiff_t(start[c + 1]));
+      if (bucket.empty()) {
+        list_members(candidates[c], listed_);
+        members_ = {listed_.data(), listed_.size()};
+      } else {
+        members_ = {bucket.data() + start[c], start[c + 1] - start[c]};
+      }
       examine(candidates[c]);
     }
     attract_fragments();
@@ -278,10 +282,6 @@ class Structure {
 
   void examine(std::uint32_t s) {
     const std::size_t n = members_.size();
-    pts_.resize(n);
-    for (std::size_t m = 0; m < n; ++m) pts_[m] = coords(members_[m]);
-    std::vector<std::int32_t> piece_of(n, -1);  // structural piece (index into local) or -1
-    std::vector<Piece> local;                   // this segment's pieces of >= min_plane voxels
     // Each voxel's possible orientations: axis a when the segment is thin along a through it
     // (thickness() at most max(4, object_gap + 2) voxels: a floor along z, a wall along its
     // normal). A horizontal ring of returns on a wall is thick along z (the rings above and below
@@ -297,7 +297,7 @@ class Structure {
       const std::size_t k = std::min<std::size_t>(n, 4096);
       std::size_t surface = 0;
       for (std::size_t i = 0; i < k; ++i) {
-        const Vec& q = pts_[i * n / k];
+        const Vec q = coords(members_[i * n / k]);
         for (int a = 0; a < 3; ++a)
           if (thickness(s, q, a, thin + 1) <= thin) {
             ++surface;
@@ -306,6 +306,11 @@ class Structure {
       }
       if (100 * surface < kMinSurfacePercent * k) return;
     }
+    // Past the sample only: a segment skipped above never costs memory per voxel.
+    pts_.resize(n);
+    for (std::size_t m = 0; m < n; ++m) pts_[m] = coords(members_[m]);
+    std::vector<std::int32_t> piece_of(n, -1);  // structural piece (index into local) or -1
+    std::vector<Piece> local;                   // this segment's pieces of >= min_plane voxels
     std::vector<std::uint8_t> axes(n, 0);
     for (std::size_t m = 0; m < n; ++m)
       for (int a = 0; a < 3; ++a)
@@ -659,7 +664,14 @@ class Structure {
   double extent_ = 0;
   int cell_ = 2;
   int margin_ = 1;
-  std::vector<std::uint32_t> members_;
+  // The voxels of the segment being examined: a stretch of the bucket or of listed_ (no copy).
+  struct Members {
+    const std::uint32_t* p = nullptr;
+    std::size_t n = 0;
+    std::size_t size() const { return n; }
+    std::uint32_t operator[](std::size_t i) const { return p[i]; }
+  } members_;
+  std::vector<std::uint32_t> listed_;
   std::vector<Vec> pts_;
   std::vector<Piece> pieces_;  // gather fragments: unsplit segments' pieces, structural pieces
 };
