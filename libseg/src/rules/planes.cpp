@@ -79,26 +79,15 @@ std::size_t count_inliers(const std::vector<Vec>& pts, const Plane& pl) {
 //
 // The terms are summed in four lanes (point i into lane i % 4, each lane in point order) and
 // the cost is (l0 + l1) + (l2 + l3): the same sum whether a kernel computes four points at a time
-// or one (kernels::PlanesKernels::cost, which scores the search's sample, stopping once the sum
-// reaches a bound; this is the refits' cost over all points).
+// or one (kernels::PlanesKernels::cost, which scores the search's sample and the refits over all
+// points, stopping once the sum reaches a bound).
 constexpr double kCap = kPlaneInlierDistance * kPlaneInlierDistance;
-
-inline double cost_term(const Plane& pl, double x, double y, double z) {
-  const double e = pl.distance(x, y, z);
-  return std::min(e * e, kCap);
-}
-
-double cost(const std::vector<Vec>& pts, const Plane& pl) {
-  double l[4] = {0, 0, 0, 0};
-  for (std::size_t i = 0; i < pts.size(); ++i) l[i % 4] += cost_term(pl, pts[i][0], pts[i][1], pts[i][2]);
-  return (l[0] + l[1]) + (l[2] + l[3]);
-}
 
 // The plane search's sample by coordinate, for the cost kernels' vector loads.
 struct Coords {
   std::vector<double> x, y, z;
-  explicit Coords(const std::vector<Vec>& pts) {
-    for (const Vec& p : pts) x.push_back(p[0]), y.push_back(p[1]), z.push_back(p[2]);
+  explicit Coords(const std::vector<Vec>& pts) : x(pts.size()), y(pts.size()), z(pts.size()) {
+    for (std::size_t i = 0; i < pts.size(); ++i) x[i] = pts[i][0], y[i] = pts[i][1], z[i] = pts[i][2];
   }
   kernels::PlanePoints points() const { return {x.data(), y.data(), z.data(), x.size()}; }
 };
@@ -116,24 +105,32 @@ void sample_cost_pair(const kernels::PlanesKernels& k, const Coords& c, const Pl
   k.cost_pair(c.points(), msac(a), msac(b), kCap, stop, cost_a, cost_b);
 }
 
-// Least-squares plane through the points within kPlaneInlierDistance of `pl`; false if degenerate.
-bool refit(const std::vector<Vec>& pts, const Plane& pl, Plane& out) {
-  Vec mean{0, 0, 0};
+// The positions in `pts` of the points within kPlaneInlierDistance of `pl`, ascending, into `out`.
+void inlier_positions(const std::vector<Vec>& pts, const Plane& pl, std::vector<std::uint32_t>& out) {
+  out.resize(pts.size());
   std::size_t n = 0;
-  for (const Vec& p : pts)
-    if (std::fabs(pl.distance(p[0], p[1], p[2])) <= kPlaneInlierDistance) {
-      for (int k = 0; k < 3; ++k) mean[k] += p[k];
-      ++n;
-    }
+  for (std::size_t i = 0; i < pts.size(); ++i) {  // (without a branch per point)
+    out[n] = static_cast<std::uint32_t>(i);
+    n += std::fabs(pl.distance(pts[i][0], pts[i][1], pts[i][2])) <= kPlaneInlierDistance;
+  }
+  out.resize(n);
+}
+
+// Least-squares plane through the points of `pts` at positions `inl` (ascending: the sums run in
+// point order); false if degenerate.
+bool refit(const std::vector<Vec>& pts, const std::vector<std::uint32_t>& inl, Plane& out) {
+  Vec mean{0, 0, 0};
+  const std::size_t n = inl.size();
+  for (const std::uint32_t i : inl)
+    for (int k = 0; k < 3; ++k) mean[k] += pts[i][k];
   if (n < 3) return false;
   for (double& m : mean) m /= double(n);
   double c[3][3] = {};
-  for (const Vec& p : pts)
-    if (std::fabs(pl.distance(p[0], p[1], p[2])) <= kPlaneInlierDistance) {
-      const Vec q = sub(p, mean);
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) c[i][j] += q[i] * q[j];
-    }
+  for (const std::uint32_t i : inl) {
+    const Vec q = sub(pts[i], mean);
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) c[a][b] += q[a] * q[b];
+  }
   const Vec nrm = smallest_eigenvector(c);
   const double len = std::sqrt(dot(nrm, nrm));
   if (!(len > 0.5)) return false;
@@ -235,17 +232,26 @@ bool sample_plane(const std::vector<Vec>& sample, std::uint64_t seed, Plane& bes
 }
 
 // Two least-squares refits over all points: the best draw passes through three noisy voxels, the
-// fit through all its inliers sits in the middle of a thick layer. Returns the inlier count.
-std::size_t refine_plane(const std::vector<Vec>& points, Plane& best) {
-  double best_cost = cost(points, best);
+// fit through all its inliers sits in the middle of a thick layer. Returns the inlier count; `inl`
+// receives the inliers' positions in `points`, ascending. The costs are the kernels' (cost()'s
+// sum bit for bit), a refit's cut short once it cannot beat the plane it refits; the inliers of
+// a plane a refit started from are not looked for again.
+std::size_t refine_plane(const std::vector<Vec>& points, Plane& best, const kernels::PlanesKernels& k,
+                         std::vector<std::uint32_t>& inl) {
+  const Coords all(points);
+  double best_cost = k.cost(all.points(), msac(best), kCap, std::numeric_limits<double>::infinity());
+  bool listed = false;  // inl holds best's inliers
   for (int r = 0; r < 2; ++r) {
+    inlier_positions(points, best, inl);
+    listed = true;
     Plane fit;
-    if (!refit(points, best, fit)) break;
-    const double c = cost(points, fit);
+    if (!refit(points, inl, fit)) break;
+    const double c = k.cost(all.points(), msac(fit), kCap, best_cost);
     if (!(c < best_cost)) break;
-    best = fit, best_cost = c;
+    best = fit, best_cost = c, listed = false;
   }
-  return count_inliers(points, best);
+  if (!listed) inlier_positions(points, best, inl);
+  return inl.size();
 }
 
 }  // namespace
@@ -260,12 +266,14 @@ void detail::msac_cost_pair(const std::vector<Vec>& points, const Plane& a, cons
 }
 
 bool fit_dominant_plane(const std::vector<Vec>& points, std::uint64_t seed, Plane& plane, std::size_t& inliers,
-                        int threads, const kernels::Table& k, int axis) {
+                        int threads, const kernels::Table& k, int axis, std::vector<std::uint32_t>* positions) {
   inliers = 0;
   std::vector<Vec> sample;
   for_sample(points.size(), [&](std::size_t i) { sample.push_back(points[i]); });
+  if (positions) positions->clear();
   if (!sample_plane(sample, seed, plane, threads, k.planes, axis)) return false;
-  inliers = refine_plane(points, plane);
+  std::vector<std::uint32_t> own;
+  inliers = refine_plane(points, plane, k.planes, positions ? *positions : own);
   return true;
 }
 
@@ -319,7 +327,8 @@ class Splitter {
     list_members(s, first, last, members);
     std::vector<Vec> all(n);
     for (std::size_t m = 0; m < n; ++m) all[m] = coords(members[m]);
-    const std::size_t inliers = refine_plane(all, pl);
+    std::vector<std::uint32_t> inl;
+    const std::size_t inliers = refine_plane(all, pl, k_, inl);
     if (inliers < min_plane || 2 * inliers < n) return f;
     f.open = open_side(s, pl, all);
     if (f.open == 0) return f;

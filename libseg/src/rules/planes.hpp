@@ -39,10 +39,11 @@ struct Plane {
 // are collinear. Candidate planes are scored on up to `threads` threads (0: all cores) with the
 // kernels `k`; the result never depends on the thread count or the kernels. With `axis` 0, 1 or 2
 // only planes whose drawn normal lies within 45 degrees of that axis are candidates (the refits may
-// tilt it further); -1: any.
+// tilt it further); -1: any. `positions`, when given, receives the positions in `points` of the
+// result's inliers, ascending (empty when it returns false).
 bool fit_dominant_plane(const std::vector<std::array<double, 3>>& points, std::uint64_t seed, Plane& plane,
                         std::size_t& inliers, int threads = 1, const kernels::Table& k = kernels::active(),
-                        int axis = -1);
+                        int axis = -1, std::vector<std::uint32_t>* positions = nullptr);
 
 // Splits every occupied segment (not already `structure`: rule 11, rules/structure.hpp, split it
 // at several planes) with at least `min_plane` voxels whose dominant plane holds at

@@ -87,6 +87,14 @@ class Structure {
     extent_ = p.structure_extent / g.voxel_size;
     cell_ = std::max(2, p.object_gap);
     margin_ = p.object_gap + 1;
+    const auto sy = static_cast<std::ptrdiff_t>(d_.nx), sz = static_cast<std::ptrdiff_t>(d_.nx * d_.ny);
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int off = std::abs(dx) + std::abs(dy) + std::abs(dz);
+          if (off == 0 || (!conn26_ && off != 1)) continue;
+          offsets_[neighbours_++] = dx + dy * sy + dz * sz;
+        }
   }
 
   void run() {
@@ -154,10 +162,15 @@ class Structure {
       }
   }
 
-  // Calls f(neighbour) for the 6 or 26 neighbours of voxel i inside the map.
+  // Calls f(neighbour) for the 6 or 26 neighbours of voxel i inside the map, z, then y, then x,
+  // each from -1 to +1; a voxel off the map's faces takes the precomputed offsets, untested.
   template <class F>
   void for_neighbours(std::size_t i, F&& f) const {
     const long x = long(i % d_.nx), y = long((i / d_.nx) % d_.ny), z = long(i / (d_.nx * d_.ny));
+    if (x > 0 && y > 0 && z > 0 && x + 1 < long(d_.nx) && y + 1 < long(d_.ny) && z + 1 < long(d_.nz)) {
+      for (std::size_t k = 0; k < neighbours_; ++k) f(i + static_cast<std::size_t>(offsets_[k]));
+      return;
+    }
     for (int dz = -1; dz <= 1; ++dz)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
@@ -264,11 +277,46 @@ class Structure {
     return std::min(run, cap);
   }
 
+  // A box around the points within distance t of a piece's plane over its extent widened by w
+  // (a <= u . x - u0 ... ): wider than that by a voxel edge, so rounding never leaves out a point
+  // the exact tests would take. [m0, m1): the voxels of the segment (pts_, in scan order, so by z)
+  // in its z range.
+  struct Box {
+    double lo[3], hi[3];
+    std::size_t m0 = 0, m1 = 0;
+    bool holds(const Vec& q) const {
+      return q[0] >= lo[0] && q[0] <= hi[0] && q[1] >= lo[1] && q[1] <= hi[1] && q[2] >= lo[2] && q[2] <= hi[2];
+    }
+  };
+  Box band_box(const Piece& pc, double t, double w) const {
+    Box b;
+    const double ca = 0.5 * (pc.u0 + pc.u1), ha = 0.5 * (pc.u1 - pc.u0) + w;
+    const double cb = 0.5 * (pc.v0 + pc.v1), hb = 0.5 * (pc.v1 - pc.v0) + w;
+    for (int k = 0; k < 3; ++k) {
+      // (u, v, n orthonormal: a point is a u + b v + (d + e) n)
+      const double c = ca * pc.u[k] + cb * pc.v[k] + pc.pl.d * pc.pl.n[k];
+      const double h = ha * std::fabs(pc.u[k]) + hb * std::fabs(pc.v[k]) + t * std::fabs(pc.pl.n[k]) + 1.0;
+      b.lo[k] = c - h, b.hi[k] = c + h;
+    }
+    const auto below = [&](double z) {
+      return std::size_t(std::partition_point(pts_.begin(), pts_.end(), [&](const Vec& q) { return q[2] < z; }) -
+                         pts_.begin());
+    };
+    b.m0 = below(b.lo[2]);
+    b.m1 = std::size_t(std::partition_point(pts_.begin() + std::ptrdiff_t(b.m0), pts_.end(),
+                                            [&](const Vec& q) { return q[2] <= b.hi[2]; }) -
+                       pts_.begin());
+    return b;
+  }
+
   // Robust spread of a plane's surface: 1.4826 x the median |distance| of the segment's voxels
   // within 4 voxel edges of it and over the piece's extent (as rules/planes.cpp).
   double surface_sigma(const Piece& pc) const {
     std::vector<double> near;
-    for (const Vec& q : pts_) {
+    const Box box = band_box(pc, 4.0, 0.0);
+    for (std::size_t m = box.m0; m < box.m1; ++m) {
+      const Vec& q = pts_[m];
+      if (!box.holds(q)) continue;
       const double e = std::fabs(pc.pl.distance(q[0], q[1], q[2]));
       if (e > 4.0) continue;
       const double a = dot(q, pc.u), b = dot(q, pc.v);
@@ -317,7 +365,7 @@ class Structure {
         if (thickness(s, pts_[m], a, thin + 1) <= thin) axes[m] |= std::uint8_t(1u << a);
     std::vector<std::uint32_t> rest;
     std::vector<Vec> rpts;
-    std::vector<std::uint32_t> inl, keep;
+    std::vector<std::uint32_t> inl, keep, positions;
     for (int axis = 2, it = 0; axis >= 0; --axis) {
       rest.clear();
       for (std::size_t m = 0; m < n; ++m)
@@ -329,12 +377,16 @@ class Structure {
       std::size_t count = 0;
       const std::uint64_t seed = 0x737472756374ull ^ (std::uint64_t(members_[0]) * 0x9E3779B97F4A7C15ull) ^
                                  (std::uint64_t(it) * 0xD1B54A32D192ED03ull);
-      if (!fit_dominant_plane(rpts, seed, pl, count, 1, k_, axis) || count < min_plane_) break;
+      if (!fit_dominant_plane(rpts, seed, pl, count, 1, k_, axis, &positions) || count < min_plane_) break;
       if (std::fabs(pl.n[std::size_t(axis)]) < std::sqrt(0.5)) break;  // (refitted away from the axis)
+      // The plane's inliers among the rest (the fit's, in order), and what stays.
       inl.clear();
       keep.clear();
-      for (const std::uint32_t m : rest)
-        (std::fabs(pl.distance(pts_[m][0], pts_[m][1], pts_[m][2])) <= kPlaneInlierDistance ? inl : keep).push_back(m);
+      for (std::size_t r = 0, i = 0; r < rest.size(); ++r)
+        if (i < positions.size() && positions[i] == r)
+          inl.push_back(rest[r]), ++i;
+        else
+          keep.push_back(rest[r]);
       rest.swap(keep);
       Vec u, v;
       plane_basis(pl.n, u, v);
@@ -432,17 +484,20 @@ class Structure {
     // Voxels the plane searches left out (those of no orientation: where a wall meets the floor,
     // under a box standing on it; a cross-section's) that lie on a structural piece's plane, over
     // its extent widened by a cell, belong to it.
+    // (A voxel takes the first piece that holds it: the pieces in order, each over the voxels of
+    // its band's box only, unclaimed ones.)
     const double w = cell_;
-    for (std::size_t m = 0; m < n; ++m) {
-      if (piece_of[m] >= 0) continue;
-      const Vec& q = pts_[m];
-      for (std::size_t p = 0; p < local.size(); ++p) {
-        const Piece& pc = local[p];
-        if (!pc.structural || std::fabs(pc.pl.distance(q[0], q[1], q[2])) > kPlaneInlierDistance) continue;
+    for (std::size_t p = 0; p < local.size(); ++p) {
+      const Piece& pc = local[p];
+      if (!pc.structural) continue;
+      const Box box = band_box(pc, kPlaneInlierDistance, w);
+      for (std::size_t m = box.m0; m < box.m1; ++m) {
+        if (piece_of[m] >= 0) continue;
+        const Vec& q = pts_[m];
+        if (!box.holds(q) || std::fabs(pc.pl.distance(q[0], q[1], q[2])) > kPlaneInlierDistance) continue;
         const double a = dot(q, pc.u), b = dot(q, pc.v);
         if (a < pc.u0 - w || a > pc.u1 + w || b < pc.v0 - w || b > pc.v1 + w) continue;
         piece_of[m] = static_cast<std::int32_t>(p);
-        break;
       }
     }
     const bool structural = std::any_of(local.begin(), local.end(), [](const Piece& pc) { return pc.structural; });
@@ -496,6 +551,7 @@ class Structure {
     };
     std::vector<Part> parts;
     std::vector<double> dmin(P), dmax(P), dsum(P);
+    std::vector<std::uint32_t> near;  // of a part: the pieces its distances are needed for
     for (std::size_t m0 = 0; m0 < n; ++m0) {
       if (labels_[members_[m0]] != s) continue;
       const std::uint32_t label = comp_top - static_cast<std::uint32_t>(parts.size());
@@ -522,25 +578,34 @@ class Structure {
       // on a wall too small to be structure, joined to the shell across unknown gaps) stays.
       bool object = vox.size() >= min_object_ && !touched_list.empty();
       if (object) {
-        for (std::size_t q = 0; q < P; ++q) dmin[q] = std::numeric_limits<double>::infinity(), dmax[q] = -dmin[q], dsum[q] = 0;
         Vec mean{0, 0, 0};
         for (const std::uint32_t w : vox) {
           const Vec c = coords(w);
           for (int k = 0; k < 3; ++k) mean[k] += c[k];
-          for (std::size_t q = 0; q < P; ++q) {
-            if (!local[q].structural) continue;
-            const double e = local[q].pl.distance(c[0], c[1], c[2]);
-            dmin[q] = std::min(dmin[q], e), dmax[q] = std::max(dmax[q], e), dsum[q] += e;
-          }
         }
         for (double& c : mean) c /= double(vox.size());
-        for (std::size_t q = 0; q < P && object; ++q) {
+        // Only the structural pieces it touches or whose extent its mean lies over are asked
+        // about its distances below: the others' are not computed.
+        near.clear();
+        for (std::size_t q = 0; q < P; ++q) {
           const Piece& pc = local[q];
           if (!pc.structural) continue;
           const double a = dot(mean, pc.u), b = dot(mean, pc.v);
           const bool over = a >= pc.u0 && a <= pc.u1 && b >= pc.v0 && b <= pc.v1;
+          if (touched[q] || over) near.push_back(static_cast<std::uint32_t>(q));
+        }
+        for (const std::uint32_t q : near) dmin[q] = std::numeric_limits<double>::infinity(), dmax[q] = -dmin[q], dsum[q] = 0;
+        for (const std::uint32_t w : vox) {
+          const Vec c = coords(w);
+          for (const std::uint32_t q : near) {
+            const double e = local[q].pl.distance(c[0], c[1], c[2]);
+            dmin[q] = std::min(dmin[q], e), dmax[q] = std::max(dmax[q], e), dsum[q] += e;
+          }
+        }
+        for (const std::uint32_t q : near) {
+          const Piece& pc = local[q];
           const bool flat = std::max(std::fabs(dmin[q]), std::fabs(dmax[q])) < pc.min_height;
-          if (flat && (touched[q] || over)) object = false;  // a layer of the plane's own surface
+          if (flat) object = false;  // a layer of the plane's own surface
         }
         for (const std::uint32_t q : touched_list) {
           if (!object) break;
@@ -664,6 +729,8 @@ class Structure {
   double extent_ = 0;
   int cell_ = 2;
   int margin_ = 1;
+  std::ptrdiff_t offsets_[26] = {};  // of the neighbours, in for_neighbours' order
+  std::size_t neighbours_ = 0;       // 6 or 26
   // The voxels of the segment being examined: a stretch of the bucket or of listed_ (no copy).
   struct Members {
     const std::uint32_t* p = nullptr;
