@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 #include "occseg/parallel.hpp"
 
@@ -85,11 +86,13 @@ constexpr double kCap = kPlaneInlierDistance * kPlaneInlierDistance;
 
 // The plane search's sample by coordinate, for the cost kernels' vector loads.
 struct Coords {
-  std::vector<double> x, y, z;
-  explicit Coords(const std::vector<Vec>& pts) : x(pts.size()), y(pts.size()), z(pts.size()) {
-    for (std::size_t i = 0; i < pts.size(); ++i) x[i] = pts[i][0], y[i] = pts[i][1], z[i] = pts[i][2];
+  std::size_t n;
+  std::unique_ptr<double[]> x, y, z;  // (not zeroed first: every element is written)
+  explicit Coords(const std::vector<Vec>& pts)
+      : n(pts.size()), x(new double[pts.size()]), y(new double[pts.size()]), z(new double[pts.size()]) {
+    for (std::size_t i = 0; i < n; ++i) x[i] = pts[i][0], y[i] = pts[i][1], z[i] = pts[i][2];
   }
-  kernels::PlanePoints points() const { return {x.data(), y.data(), z.data(), x.size()}; }
+  kernels::PlanePoints points() const { return {x.get(), y.get(), z.get(), n}; }
 };
 
 kernels::MsacPlane msac(const Plane& pl) { return {pl.n[0], pl.n[1], pl.n[2], pl.d}; }
@@ -105,29 +108,28 @@ void sample_cost_pair(const kernels::PlanesKernels& k, const Coords& c, const Pl
   k.cost_pair(c.points(), msac(a), msac(b), kCap, stop, cost_a, cost_b);
 }
 
-// The positions in `pts` of the points within kPlaneInlierDistance of `pl`, ascending, into `out`.
-void inlier_positions(const std::vector<Vec>& pts, const Plane& pl, std::vector<std::uint32_t>& out) {
-  out.resize(pts.size());
+// The positions in `pts` of the points within kPlaneInlierDistance of `pl`, ascending, into
+// out[0 ..) (room for pts.size()); returns how many.
+std::size_t inlier_positions(const std::vector<Vec>& pts, const Plane& pl, std::uint32_t* out) {
   std::size_t n = 0;
   for (std::size_t i = 0; i < pts.size(); ++i) {  // (without a branch per point)
     out[n] = static_cast<std::uint32_t>(i);
     n += std::fabs(pl.distance(pts[i][0], pts[i][1], pts[i][2])) <= kPlaneInlierDistance;
   }
-  out.resize(n);
+  return n;
 }
 
 // Least-squares plane through the points of `pts` at positions `inl` (ascending: the sums run in
 // point order); false if degenerate.
-bool refit(const std::vector<Vec>& pts, const std::vector<std::uint32_t>& inl, Plane& out) {
+bool refit(const std::vector<Vec>& pts, const std::uint32_t* inl, std::size_t n, Plane& out) {
   Vec mean{0, 0, 0};
-  const std::size_t n = inl.size();
-  for (const std::uint32_t i : inl)
-    for (int k = 0; k < 3; ++k) mean[k] += pts[i][k];
+  for (std::size_t j = 0; j < n; ++j)
+    for (int k = 0; k < 3; ++k) mean[k] += pts[inl[j]][k];
   if (n < 3) return false;
   for (double& m : mean) m /= double(n);
   double c[3][3] = {};
-  for (const std::uint32_t i : inl) {
-    const Vec q = sub(pts[i], mean);
+  for (std::size_t j = 0; j < n; ++j) {
+    const Vec q = sub(pts[inl[j]], mean);
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b) c[a][b] += q[a] * q[b];
   }
@@ -239,19 +241,22 @@ bool sample_plane(const std::vector<Vec>& sample, std::uint64_t seed, Plane& bes
 std::size_t refine_plane(const std::vector<Vec>& points, Plane& best, const kernels::PlanesKernels& k,
                          std::vector<std::uint32_t>& inl) {
   const Coords all(points);
+  const std::unique_ptr<std::uint32_t[]> buffer(new std::uint32_t[points.size()]);
   double best_cost = k.cost(all.points(), msac(best), kCap, std::numeric_limits<double>::infinity());
-  bool listed = false;  // inl holds best's inliers
+  std::size_t n = 0;
+  bool listed = false;  // buffer[0, n) holds best's inliers
   for (int r = 0; r < 2; ++r) {
-    inlier_positions(points, best, inl);
+    n = inlier_positions(points, best, buffer.get());
     listed = true;
     Plane fit;
-    if (!refit(points, inl, fit)) break;
+    if (!refit(points, buffer.get(), n, fit)) break;
     const double c = k.cost(all.points(), msac(fit), kCap, best_cost);
     if (!(c < best_cost)) break;
     best = fit, best_cost = c, listed = false;
   }
-  if (!listed) inlier_positions(points, best, inl);
-  return inl.size();
+  if (!listed) n = inlier_positions(points, best, buffer.get());
+  inl.assign(buffer.get(), buffer.get() + n);
+  return n;
 }
 
 }  // namespace
