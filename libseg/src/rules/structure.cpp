@@ -263,10 +263,12 @@ class Structure {
     int run = 1;
     for (int dir = -1; dir <= 1; dir += 2) {
       int gap = 0;
-      for (long t = 1; run < cap; ++t) {
-        const long q = at + dir * t;
-        if (q < 0 || q >= long(lim[axis])) break;
-        if (labels_[std::size_t(long(i0) + dir * t * stride[axis])] == s) {
+      const long room = dir < 0 ? at : long(lim[axis]) - 1 - at;  // steps before the map's face
+      const long step = dir * stride[axis];
+      long j = long(i0);
+      for (long t = 1; run < cap && t <= room; ++t) {
+        j += step;
+        if (labels_[std::size_t(j)] == s) {
           run += gap + 1;
           gap = 0;
         } else if (++gap > p_.object_gap) {
