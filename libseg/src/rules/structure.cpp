@@ -281,11 +281,14 @@ class Structure {
 
   // A box around the points within distance t of a piece's plane over its extent widened by w
   // (a <= u . x - u0 ... ): wider than that by a voxel edge, so rounding never leaves out a point
-  // the exact tests would take. [m0, m1): the voxels of the segment (pts_, in scan order, so by z)
-  // in its z range.
+  // the exact tests would take. at(i0 .. i1): the voxels of the segment (indices into pts_) in its
+  // range along the axis that has the fewest there, in order along it (pts_ is in scan order, so
+  // by z; by_ holds the orders by x and by y). Its users' results do not depend on the order.
   struct Box {
     double lo[3], hi[3];
-    std::size_t m0 = 0, m1 = 0;
+    const std::uint32_t* order = nullptr;  // nullptr: scan order
+    std::size_t i0 = 0, i1 = 0;
+    std::size_t at(std::size_t i) const { return order ? order[i] : i; }
     bool holds(const Vec& q) const {
       return q[0] >= lo[0] && q[0] <= hi[0] && q[1] >= lo[1] && q[1] <= hi[1] && q[2] >= lo[2] && q[2] <= hi[2];
     }
@@ -300,14 +303,23 @@ class Structure {
       const double h = ha * std::fabs(pc.u[k]) + hb * std::fabs(pc.v[k]) + t * std::fabs(pc.pl.n[k]) + 1.0;
       b.lo[k] = c - h, b.hi[k] = c + h;
     }
-    const auto below = [&](double z) {
-      return std::size_t(std::partition_point(pts_.begin(), pts_.end(), [&](const Vec& q) { return q[2] < z; }) -
-                         pts_.begin());
-    };
-    b.m0 = below(b.lo[2]);
-    b.m1 = std::size_t(std::partition_point(pts_.begin() + std::ptrdiff_t(b.m0), pts_.end(),
-                                            [&](const Vec& q) { return q[2] <= b.hi[2]; }) -
-                       pts_.begin());
+    std::size_t best = ~std::size_t(0);
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t* order = k < 2 ? by_[k].data() : nullptr;
+      const auto key = [&](std::size_t i) { return pts_[order ? order[i] : i][std::size_t(k)]; };
+      std::size_t lo = 0, hi = pts_.size();  // first i with key >= b.lo[k]
+      while (lo < hi) {
+        const std::size_t mid = lo + (hi - lo) / 2;
+        if (key(mid) < b.lo[k]) lo = mid + 1; else hi = mid;
+      }
+      const std::size_t i0 = lo;
+      hi = pts_.size();  // first i with key > b.hi[k]
+      while (lo < hi) {
+        const std::size_t mid = lo + (hi - lo) / 2;
+        if (key(mid) <= b.hi[k]) lo = mid + 1; else hi = mid;
+      }
+      if (lo - i0 < best) best = lo - i0, b.order = order, b.i0 = i0, b.i1 = lo;
+    }
     return b;
   }
 
@@ -316,8 +328,8 @@ class Structure {
   double surface_sigma(const Piece& pc) const {
     std::vector<double> near;
     const Box box = band_box(pc, 4.0, 0.0);
-    for (std::size_t m = box.m0; m < box.m1; ++m) {
-      const Vec& q = pts_[m];
+    for (std::size_t i = box.i0; i < box.i1; ++i) {
+      const Vec& q = pts_[box.at(i)];
       if (!box.holds(q)) continue;
       const double e = std::fabs(pc.pl.distance(q[0], q[1], q[2]));
       if (e > 4.0) continue;
@@ -359,6 +371,17 @@ class Structure {
     // Past the sample only: a segment skipped above never costs memory per voxel.
     pts_.resize(n);
     for (std::size_t m = 0; m < n; ++m) pts_[m] = coords(members_[m]);
+    {  // by_: the voxels in order of x, and of y (counting sorts, ties in scan order)
+      const std::size_t dims[2] = {d_.nx, d_.ny};
+      std::vector<std::size_t> start;
+      for (int k = 0; k < 2; ++k) {
+        start.assign(dims[k] + 1, 0);
+        for (std::size_t m = 0; m < n; ++m) ++start[std::size_t(pts_[m][std::size_t(k)]) + 1];
+        for (std::size_t c = 1; c <= dims[k]; ++c) start[c] += start[c - 1];
+        by_[k].resize(n);
+        for (std::size_t m = 0; m < n; ++m) by_[k][start[std::size_t(pts_[m][std::size_t(k)])]++] = std::uint32_t(m);
+      }
+    }
     std::vector<std::int32_t> piece_of(n, -1);  // structural piece (index into local) or -1
     std::vector<Piece> local;                   // this segment's pieces of >= min_plane voxels
     std::vector<std::uint8_t> axes(n, 0);
@@ -493,7 +516,8 @@ class Structure {
       const Piece& pc = local[p];
       if (!pc.structural) continue;
       const Box box = band_box(pc, kPlaneInlierDistance, w);
-      for (std::size_t m = box.m0; m < box.m1; ++m) {
+      for (std::size_t i = box.i0; i < box.i1; ++i) {
+        const std::size_t m = box.at(i);
         if (piece_of[m] >= 0) continue;
         const Vec& q = pts_[m];
         if (!box.holds(q) || std::fabs(pc.pl.distance(q[0], q[1], q[2])) > kPlaneInlierDistance) continue;
@@ -742,6 +766,7 @@ class Structure {
   } members_;
   std::vector<std::uint32_t> listed_;
   std::vector<Vec> pts_;
+  std::vector<std::uint32_t> by_[2];  // the examined segment's voxels (into pts_) by x, by y
   std::vector<Piece> pieces_;  // gather fragments: unsplit segments' pieces, structural pieces
 };
 
