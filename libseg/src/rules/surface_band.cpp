@@ -65,8 +65,10 @@ void box_axis(const Layout& L, const word_t* in, word_t* out, int axis, std::siz
       for (std::size_t i = W; i < P; ++i) o[i] = op(o[i], a[i - W]);
       for (std::size_t i = 0; i + W < P; ++i) o[i] = op(o[i], a[i + W]);
     } else {  // planes z - 1 and z + 1, P words before and after
-      if (z > 0)
-        for (std::size_t i = 0; i < P; ++i) o[i] = op(o[i], a[i - P]);
+      if (z > 0) {
+        const word_t* const below = a - P;  // (a[i - P] would wrap the unsigned index: UB)
+        for (std::size_t i = 0; i < P; ++i) o[i] = op(o[i], below[i]);
+      }
       if (z + 1 < nz)
         for (std::size_t i = 0; i < P; ++i) o[i] = op(o[i], a[i + P]);
     }
@@ -84,7 +86,7 @@ void face_dilate(const Layout& L, const word_t* in, word_t* out, std::size_t z0,
     for (std::size_t i = W; i < P; ++i) o[i] |= a[i - W];
     for (std::size_t i = 0; i + W < P; ++i) o[i] |= a[i + W];
     if (z > 0)
-      for (std::size_t i = 0; i < P; ++i) o[i] |= a[i - P];
+      for (std::size_t i = 0; i < P; ++i) o[i] |= (a - P)[i];
     if (z + 1 < nz)
       for (std::size_t i = 0; i < P; ++i) o[i] |= a[i + P];
   }
