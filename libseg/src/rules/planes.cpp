@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "occseg/parallel.hpp"
+#include "rules/neighbours.hpp"
 
 namespace occseg {
 
@@ -289,16 +290,8 @@ class Splitter {
  public:
   Splitter(const Grid& g, LabelArray& labels, std::vector<Segment>& segments, bool occupied26,
            const kernels::PlanesKernels& k)
-      : g_(g), d_(g.dims), labels_(labels), segs_(segments), conn26_(occupied26), k_(k) {
-    const auto sy = static_cast<std::ptrdiff_t>(d_.nx), sz = static_cast<std::ptrdiff_t>(d_.nx * d_.ny);
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int off = std::abs(dx) + std::abs(dy) + std::abs(dz);
-          if (off == 0 || (!conn26_ && off != 1)) continue;
-          offsets_[neighbours_++] = dx + dy * sy + dz * sz;
-        }
-  }
+      : g_(g), d_(g.dims), labels_(labels), segs_(segments), k_(k),
+        neighbours_(g.dims, occupied26) {}
 
   // Examines segment `s`. Its voxels are [first, last) in scan order when the caller bucketed
   // them, else (first = nullptr) they are found by scanning its box.
@@ -484,27 +477,10 @@ class Splitter {
     return true;
   }
 
-  // Calls f(neighbour index) for the 6 or 26 neighbours of voxel i inside the grid, in the order
-  // of their offsets (z, then y, then x, each from -1 to +1). A voxel off the grid's faces takes
-  // the precomputed offsets without a test per neighbour (those tests and the coordinates would
-  // be most of a flood's work).
+  // The neighbours of voxel i inside the map, in VoxelNeighbours' order.
   template <class F>
   void for_neighbours(std::size_t i, F&& f) const {
-    const std::size_t x = i % d_.nx, y = (i / d_.nx) % d_.ny, z = i / (d_.nx * d_.ny);
-    if (x > 0 && y > 0 && z > 0 && x + 1 < d_.nx && y + 1 < d_.ny && z + 1 < d_.nz) {
-      for (std::size_t k = 0; k < neighbours_; ++k) f(i + static_cast<std::size_t>(offsets_[k]));
-      return;
-    }
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int off = std::abs(dx) + std::abs(dy) + std::abs(dz);
-          if (off == 0 || (!conn26_ && off != 1)) continue;
-          if ((dx < 0 && x == 0) || (dx > 0 && x + 1 == d_.nx) || (dy < 0 && y == 0) || (dy > 0 && y + 1 == d_.ny) ||
-              (dz < 0 && z == 0) || (dz > 0 && z + 1 == d_.nz))
-            continue;
-          f(g_.index(x + dx, y + dy, z + dz));
-        }
+    neighbours_.for_each(i, f);
   }
 
   // Flood-fills the voxels labelled `from` connected to `seed`, writing `to`; calls visit(voxel)
@@ -635,10 +611,8 @@ class Splitter {
   const Dims d_;
   LabelArray& labels_;
   std::vector<Segment>& segs_;
-  const bool conn26_;
   const kernels::PlanesKernels& k_;
-  std::ptrdiff_t offsets_[26];  // of the neighbours, in for_neighbours' order
-  std::size_t neighbours_ = 0;  // 6 or 26
+  VoxelNeighbours neighbours_;
   Plane plane_;
   std::vector<std::uint32_t> members_, stack_;
   std::vector<Vec> pts_;

@@ -8,6 +8,7 @@
 #include <numeric>
 
 #include "occseg/parallel.hpp"
+#include "rules/neighbours.hpp"
 #include "rules/objects.hpp"
 #include "rules/planes.hpp"
 
@@ -81,20 +82,13 @@ struct Sum {
 class Structure {
  public:
   Structure(const Grid& g, LabelArray& labels, std::vector<Segment>& segs, const Params& p, const kernels::Table& k)
-      : g_(g), d_(g.dims), labels_(labels), segs_(segs), p_(p), k_(k), conn26_(p.occupied_connectivity == 26) {
+      : g_(g), d_(g.dims), labels_(labels), segs_(segs), p_(p), k_(k),
+        neighbours_(g.dims, p.occupied_connectivity == 26) {
     min_plane_ = static_cast<std::size_t>(p.support_plane);
     min_object_ = std::max<std::size_t>(kMinObjectVoxels, minimum_size(p.min_object_voxels, d_));
     extent_ = p.structure_extent / g.voxel_size;
     cell_ = std::max(2, p.object_gap);
     margin_ = p.object_gap + 1;
-    const auto sy = static_cast<std::ptrdiff_t>(d_.nx), sz = static_cast<std::ptrdiff_t>(d_.nx * d_.ny);
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int off = std::abs(dx) + std::abs(dy) + std::abs(dz);
-          if (off == 0 || (!conn26_ && off != 1)) continue;
-          offsets_[neighbours_++] = dx + dy * sy + dz * sz;
-        }
   }
 
   void run() {
@@ -162,24 +156,10 @@ class Structure {
       }
   }
 
-  // Calls f(neighbour) for the 6 or 26 neighbours of voxel i inside the map, z, then y, then x,
-  // each from -1 to +1; a voxel off the map's faces takes the precomputed offsets, untested.
+  // The neighbours of voxel i inside the map, in VoxelNeighbours' order.
   template <class F>
   void for_neighbours(std::size_t i, F&& f) const {
-    const long x = long(i % d_.nx), y = long((i / d_.nx) % d_.ny), z = long(i / (d_.nx * d_.ny));
-    if (x > 0 && y > 0 && z > 0 && x + 1 < long(d_.nx) && y + 1 < long(d_.ny) && z + 1 < long(d_.nz)) {
-      for (std::size_t k = 0; k < neighbours_; ++k) f(i + static_cast<std::size_t>(offsets_[k]));
-      return;
-    }
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int off = std::abs(dx) + std::abs(dy) + std::abs(dz);
-          if (off == 0 || (!conn26_ && off != 1)) continue;
-          const long a = x + dx, b = y + dy, c = z + dz;
-          if (a < 0 || b < 0 || c < 0 || a >= long(d_.nx) || b >= long(d_.ny) || c >= long(d_.nz)) continue;
-          f(g_.index(std::size_t(a), std::size_t(b), std::size_t(c)));
-        }
+    neighbours_.for_each(i, f);
   }
 
   bool voxel_at(const Vec& c, double t, const Vec& n, std::size_t& out) const {
@@ -750,13 +730,11 @@ class Structure {
   std::vector<Segment>& segs_;
   const Params& p_;
   const kernels::Table& k_;
-  const bool conn26_;
   std::size_t min_plane_ = 0, min_object_ = 0;
   double extent_ = 0;
   int cell_ = 2;
   int margin_ = 1;
-  std::ptrdiff_t offsets_[26] = {};  // of the neighbours, in for_neighbours' order
-  std::size_t neighbours_ = 0;       // 6 or 26
+  VoxelNeighbours neighbours_;
   // The voxels of the segment being examined: a stretch of the bucket or of listed_ (no copy).
   struct Members {
     const std::uint32_t* p = nullptr;
