@@ -59,35 +59,36 @@ InputFile::InputFile(const std::string& path) : path_(path) {
 
 InputFile::~InputFile() { ::close(fd_); }
 
-std::size_t InputFile::read(void* buf, std::size_t n) {
+namespace {
+
+// Calls `step(p + done, at_most, done)` (a read or pread of the rest) until n bytes are read or
+// the file ends, in pieces of at most 1 GiB, retrying on EINTR; the bytes read.
+template <class Step>
+std::size_t read_fully(const std::string& path, void* buf, std::size_t n, Step step) {
   auto* p = static_cast<char*>(buf);
   std::size_t done = 0;
   while (done < n) {
-    const ssize_t r = ::read(fd_, p + done, std::min<std::size_t>(n - done, std::size_t(1) << 30));
+    const ssize_t r = step(p + done, std::min<std::size_t>(n - done, std::size_t(1) << 30), done);
     if (r == 0) break;
     if (r < 0) {
       if (errno == EINTR) continue;
-      throw Error(Status::io, "cannot read '" + path_ + "': " + std::strerror(errno));
+      throw Error(Status::io, "cannot read '" + path + "': " + std::strerror(errno));
     }
     done += static_cast<std::size_t>(r);
   }
   return done;
 }
 
+}  // namespace
+
+std::size_t InputFile::read(void* buf, std::size_t n) {
+  return read_fully(path_, buf, n, [this](char* p, std::size_t k, std::size_t) { return ::read(fd_, p, k); });
+}
+
 std::size_t InputFile::read_at(std::size_t offset, void* buf, std::size_t n) const {
-  auto* p = static_cast<char*>(buf);
-  std::size_t done = 0;
-  while (done < n) {
-    const ssize_t r = ::pread(fd_, p + done, std::min<std::size_t>(n - done, std::size_t(1) << 30),
-                              static_cast<off_t>(offset + done));
-    if (r == 0) break;
-    if (r < 0) {
-      if (errno == EINTR) continue;
-      throw Error(Status::io, "cannot read '" + path_ + "': " + std::strerror(errno));
-    }
-    done += static_cast<std::size_t>(r);
-  }
-  return done;
+  return read_fully(path_, buf, n, [this, offset](char* p, std::size_t k, std::size_t done) {
+    return ::pread(fd_, p, k, static_cast<off_t>(offset + done));
+  });
 }
 
 void check_readable(const std::string& path) {
