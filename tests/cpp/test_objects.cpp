@@ -12,6 +12,7 @@
 #include "rules/objects.hpp"
 #include "rules/planes.hpp"
 #include "stages/label.hpp"
+#include "state_scene.hpp"
 
 using namespace occseg;
 
@@ -21,27 +22,13 @@ constexpr int F = 0, U = 1, O = 2;
 
 // A map of three states given by a function of the voxel, labelled as the pipeline's labelling
 // makes it, then grouped by the rules.
-struct Scene {
-  Grid grid;
-  std::vector<std::uint8_t> states;
-  LabelArray labels;
-  std::vector<Segment> segments;
-  Scene(Dims d, const std::function<int(int, int, int)>& state) : grid(d, 0.5f) {
-    states.resize(d.count());
-    for (std::size_t z = 0; z < d.nz; ++z)
-      for (std::size_t y = 0; y < d.ny; ++y)
-        for (std::size_t x = 0; x < d.nx; ++x) {
-          const std::size_t i = grid.index(x, y, z);
-          states[i] = static_cast<std::uint8_t>(state(int(x), int(y), int(z)));
-          grid.p[i] = states[i] == O ? 0.9f : (states[i] == U ? 0.5f : 0.1f);
-        }
-  }
+struct Scene : testing_scene::StateScene {
+  Scene(Dims d, const std::function<int(int, int, int)>& state) : StateScene(d, 1.0, state) {}
   void group(const Params& p) {
     label_components(states, grid, labels, segments, 1, true);
     group_objects(grid, labels, segments, p);
     assign_kinds(segments, p, grid.dims);
   }
-  std::uint32_t at(int x, int y, int z) const { return labels[grid.index(x, y, z)]; }
   std::size_t count(State s) const {
     std::size_t n = 0;
     for (const Segment& seg : segments) n += seg.state == s;

@@ -11,6 +11,7 @@
 #include "isa_levels.hpp"
 #include "occseg/segment.hpp"
 #include "rules/planes.hpp"
+#include "state_scene.hpp"
 
 using namespace occseg;
 using occseg::testing_isa::for_each_isa;
@@ -18,37 +19,14 @@ using occseg::testing_isa::for_each_isa;
 namespace {
 
 // A map of three states (0 free, 1 unknown, 2 occupied) given by a function of the voxel.
-struct Scene {
-  Grid grid;
-  std::vector<std::uint8_t> states;
-  Scene(Dims d, const std::function<int(int, int, int)>& state) : grid(d, 0.5f) {
-    states.resize(d.count());
-    for (std::size_t z = 0; z < d.nz; ++z)
-      for (std::size_t y = 0; y < d.ny; ++y)
-        for (std::size_t x = 0; x < d.nx; ++x) {
-          const std::size_t i = grid.index(x, y, z);
-          states[i] = static_cast<std::uint8_t>(state(int(x), int(y), int(z)));
-          grid.p[i] = states[i] == 2 ? 0.9f : (states[i] == 1 ? 0.5f : 0.1f);
-        }
-  }
+struct Scene : testing_scene::StateScene {
+  Scene(Dims d, const std::function<int(int, int, int)>& state) : StateScene(d, 1.0, state) {}
   // Labels as the pipeline's last stage makes them, then the split.
   void label_and_split(std::size_t min_plane, bool conn26 = true) {
     label_components(states, grid, labels, segments, 1, conn26);
     before = segments.size();
     split_support_planes(grid, labels, segments, min_plane, conn26);
   }
-  std::uint32_t at(int x, int y, int z) const { return labels[grid.index(x, y, z)]; }
-  // Ids of the voxels for which `pick` is true.
-  std::set<std::uint32_t> ids(const std::function<bool(int, int, int)>& pick) const {
-    std::set<std::uint32_t> s;
-    for (std::size_t z = 0; z < grid.dims.nz; ++z)
-      for (std::size_t y = 0; y < grid.dims.ny; ++y)
-        for (std::size_t x = 0; x < grid.dims.nx; ++x)
-          if (pick(int(x), int(y), int(z))) s.insert(labels[grid.index(x, y, z)]);
-    return s;
-  }
-  LabelArray labels;
-  std::vector<Segment> segments;
   std::size_t before = 0;
 };
 

@@ -12,6 +12,7 @@
 #include "rules/objects.hpp"
 #include "rules/structure.hpp"
 #include "stages/label.hpp"
+#include "state_scene.hpp"
 
 using namespace occseg;
 
@@ -19,34 +20,12 @@ namespace {
 
 constexpr int F = 0, U = 1, O = 2;
 
-struct Scene {
-  Grid grid;
-  std::vector<std::uint8_t> states;
-  LabelArray labels;
-  std::vector<Segment> segments;
-  Scene(Dims d, double voxel_size, const std::function<int(int, int, int)>& state) : grid(d, 0.5f, voxel_size) {
-    states.resize(d.count());
-    for (std::size_t z = 0; z < d.nz; ++z)
-      for (std::size_t y = 0; y < d.ny; ++y)
-        for (std::size_t x = 0; x < d.nx; ++x) {
-          const std::size_t i = grid.index(x, y, z);
-          states[i] = static_cast<std::uint8_t>(state(int(x), int(y), int(z)));
-          grid.p[i] = states[i] == O ? 0.9f : (states[i] == U ? 0.5f : 0.1f);
-        }
-  }
+struct Scene : testing_scene::StateScene {
+  using StateScene::StateScene;
   void run(const Params& p) {
     label_components(states, grid, labels, segments, 1, true);
     split_structure(grid, labels, segments, p);
     assign_kinds(segments, p, grid.dims);
-  }
-  std::uint32_t at(int x, int y, int z) const { return labels[grid.index(x, y, z)]; }
-  std::set<std::uint32_t> ids(const std::function<bool(int, int, int)>& pick) const {
-    std::set<std::uint32_t> s;
-    for (std::size_t z = 0; z < grid.dims.nz; ++z)
-      for (std::size_t y = 0; y < grid.dims.ny; ++y)
-        for (std::size_t x = 0; x < grid.dims.nx; ++x)
-          if (pick(int(x), int(y), int(z))) s.insert(labels[grid.index(x, y, z)]);
-    return s;
   }
 };
 
