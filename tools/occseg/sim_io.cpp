@@ -93,6 +93,11 @@ json scene_json(const sim::Scene& scene, const sim::ScanConfig& config, const si
   std::array<std::uint64_t, 3> states{};
   for (std::uint8_t s : truth.state) ++states[s];
   const Dims& d = scene.frame.dims;
+  json sensor = {{"range_sigma", config.range_sigma},
+                 {"angle_step_deg", config.angle_step_deg},
+                 {"max_range", config.max_range},
+                 {"noise", "mt19937_64 + Box-Muller, scan k of layer z seeded with splitmix(seed, z, k)"}};
+  if (config.mode == sim::ScanMode::rings) sensor["ring_step_deg"] = config.ring_step_deg;
   return {{"scene", scene.name},
           {"construction", sim::scan_mode_name(config.mode)},
           {"seed", config.seed},
@@ -100,11 +105,7 @@ json scene_json(const sim::Scene& scene, const sim::ScanConfig& config, const si
           {"array_order", "[z, y, x]"},
           {"voxel_size", scene.frame.voxel_size},
           {"origin", vec(scene.frame.origin)},
-          {"sensor",
-           {{"range_sigma", config.range_sigma},
-            {"angle_step_deg", config.angle_step_deg},
-            {"max_range", config.max_range},
-            {"noise", "mt19937_64 + Box-Muller, scan k of layer z seeded with splitmix(seed, z, k)"}}},
+          {"sensor", sensor},
           {"fusion",
            {{"p_hit", config.model.p_hit},
             {"p_miss", config.model.p_miss},

@@ -25,24 +25,33 @@ std::size_t steps_in(double span, double step) {
 
 }  // namespace
 
-const char* scan_mode_name(ScanMode m) { return m == ScanMode::planar ? "planar" : "full3d"; }
+const char* scan_mode_name(ScanMode m) {
+  switch (m) {
+    case ScanMode::planar: return "planar";
+    case ScanMode::full3d: return "full3d";
+    case ScanMode::rings: return "rings";
+  }
+  return "?";
+}
 
 void ScanConfig::validate() const {
   auto bad = [](const std::string& what) { throw Error(Status::invalid_argument, "scan config: " + what); };
   if (!(range_sigma >= 0) || !std::isfinite(range_sigma)) bad("range_sigma must be >= 0");
   if (!(angle_step_deg >= 0.01 && angle_step_deg <= 90)) bad("angle_step_deg must be in [0.01, 90]");
+  if (!(ring_step_deg >= 0.01 && ring_step_deg <= 90)) bad("ring_step_deg must be in [0.01, 90]");
   if (!(max_range > 0) || !std::isfinite(max_range)) bad("max_range must be positive");
   model.validate();
 }
 
-std::vector<Vec3> ray_directions(const Viewpoint& v, ScanMode mode, double step_deg) {
+std::vector<Vec3> ray_directions(const Viewpoint& v, ScanMode mode, double step_deg, double ring_step_deg) {
   std::size_t n_az = steps_in(v.fov_deg, step_deg) + 1;
   if (v.fov_deg >= 360) n_az = steps_in(360, step_deg);  // the last ray would repeat the first
   std::vector<double> pitches{0.0};
-  if (mode == ScanMode::full3d) {
+  if (mode != ScanMode::planar) {
+    const double row = mode == ScanMode::rings ? ring_step_deg : step_deg;
     pitches.clear();
-    const std::size_t n_p = steps_in(v.pitch_max_deg - v.pitch_min_deg, step_deg) + 1;
-    for (std::size_t i = 0; i < n_p; ++i) pitches.push_back(v.pitch_min_deg + i * step_deg);
+    const std::size_t n_p = steps_in(v.pitch_max_deg - v.pitch_min_deg, row) + 1;
+    for (std::size_t i = 0; i < n_p; ++i) pitches.push_back(v.pitch_min_deg + i * row);
   }
   std::vector<Vec3> dirs;
   dirs.reserve(n_az * pitches.size());
@@ -91,7 +100,7 @@ std::vector<Vec3> scan_endpoints(const Scene& scene, const Vec3& sensor, const s
 }
 
 Vec3 sensor_position(const Scene& scene, const Viewpoint& v, ScanMode mode, std::size_t z) {
-  if (mode == ScanMode::full3d) return v.position;
+  if (mode != ScanMode::planar) return v.position;
   const GridFrame& f = scene.frame;
   return {v.position[0], v.position[1], f.origin[2] + (static_cast<double>(z) + 0.5) * f.voxel_size};
 }
@@ -105,7 +114,7 @@ Grid simulate_map(const Scene& scene, const ScanConfig& config) {
   Grid out(f.dims, 0.5f, f.voxel_size);
   out.origin = f.origin;
 
-  if (config.mode == ScanMode::full3d) {
+  if (config.mode != ScanMode::planar) {
     OccupancyFusion fusion(f, model);
     std::size_t k = 0;
     const double views = static_cast<double>(scene.viewpoints.size());
@@ -117,8 +126,8 @@ Grid simulate_map(const Scene& scene, const ScanConfig& config) {
       const Viewpoint& v = scene.viewpoints[k];
       Rng rng(mix_seed(config.seed, 0, k));
       const Vec3 s = sensor_position(scene, v, config.mode, 0);
-      fusion.insert_scan(s, scan_endpoints(scene, s, ray_directions(v, config.mode, config.angle_step_deg), config, rng),
-                         config.threads);
+      const auto dirs = ray_directions(v, config.mode, config.angle_step_deg, config.ring_step_deg);
+      fusion.insert_scan(s, scan_endpoints(scene, s, dirs, config, rng), config.threads);
     }
     out.p = fusion.grid().p;
     return out;

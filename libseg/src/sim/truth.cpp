@@ -83,7 +83,7 @@ Truth ground_truth(const Scene& scene, const ScanConfig& config) {
 
   // Aim points within a voxel, as offsets from its centre in voxels.
   std::vector<Vec3> aims;
-  const int zr = config.mode == ScanMode::full3d ? 1 : 0;
+  const int zr = config.mode == ScanMode::planar ? 0 : 1;
   for (int dz = -zr; dz <= zr; ++dz)
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx) aims.push_back({dx / 3.0, dy / 3.0, dz / 3.0});

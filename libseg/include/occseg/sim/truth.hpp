@@ -22,7 +22,7 @@ std::vector<std::uint16_t> object_mask(const Scene& scene, int threads = 0);
 // Ideal state of every voxel (docs/experiments.md, "Ground truth"):
 //  - occupied: a noise-free ray from some viewpoint, inside its field of view and max range,
 //    meets a solid for the first time inside the voxel. Rays are aimed at a 3 x 3 grid of points
-//    (3 x 3 x 3 in full3d; the scan plane only in planar mode) of each voxel the surface may cross;
+//    (3 x 3 x 3 in full3d and rings; the scan plane only in planar mode) of each voxel the surface may cross;
 //  - free: otherwise, when the voxel centre is outside every solid and some viewpoint sees it
 //    (in view, within max range, nothing in between);
 //  - unknown: everything else (occluded, inside solids, out of view or range).

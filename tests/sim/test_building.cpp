@@ -1,0 +1,192 @@
+// The simulated building (scene "building", docs/experiments.md, "A simulated building") and the
+// rings scan mode it is scanned with: the ring pattern on a wall computed by hand, the scene's
+// layout, and the default preset on a 200 x 150 x 30 map of 10 cm voxels (the 20 x 15 x 3 m
+// storey at scale 1, small enough to run in seconds).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <string>
+
+#include "occseg/segment.hpp"
+#include "occseg/sim/metrics.hpp"
+
+using namespace occseg;
+using namespace occseg::sim;
+
+TEST(SimRings, RingsAreBeamsRingStepApartInPitch) {
+  Viewpoint v;  // pitch -45..45, fov 180
+  const auto dirs = ray_directions(v, ScanMode::rings, 0.5, 3.0);
+  EXPECT_EQ(dirs.size(), 31u * 361u);  // 90 / 3 + 1 rings of 180 / 0.5 + 1 rays
+  for (std::size_t k = 0; k < 31; ++k) {
+    const Vec3& d = dirs[k * 361];
+    EXPECT_NEAR(std::asin(d[2]) * 57.29577951308232, -45.0 + 3.0 * double(k), 1e-9) << k;
+  }
+}
+
+// One wall whose face is at x = 5.03 m, 4.48 m from a rings sensor at (0.55, 0.55, 1.02), no
+// noise. The voxel column of the face in the sensor's row (x 50, y 5) is hit by ring k at
+// z = 1.02 + 4.48 tan(3k degrees): 0.068, 0.310, 0.549, 0.785, 1.020, 1.255, 1.491, 1.730, 1.972,
+// 2.220 m for k = -4..5 (rings -5 and 6 leave the 2.4 m map before x = 5), every one at least
+// 8 mm from a voxel boundary also for the rays 0.5 degrees aside and where the ray enters the
+// column. So layers 0, 3, 5, 7, 10, 12, 14, 17, 19, 22 are occupied and all others stay exactly
+// 0.5: rings of returns with unknown between them.
+TEST(SimRings, AWallShowsRingsOfReturnsWithUnknownBetween) {
+  Scene s;
+  s.name = "ring wall";
+  s.frame.dims = Dims{60, 12, 24};
+  s.frame.voxel_size = 0.1;
+  s.objects = {"wall"};
+  s.shapes = {make_box({5.03, -1, -1}, {5.5, 2, 3}, 1)};
+  Viewpoint v;
+  v.position = {0.55, 0.55, 1.02};
+  v.fov_deg = 360;
+  s.viewpoints = {v};
+  ScanConfig c;
+  c.mode = ScanMode::rings;
+  c.range_sigma = 0;
+  const Grid g = simulate_map(s, c);
+  const std::set<std::size_t> rings = {0, 3, 5, 7, 10, 12, 14, 17, 19, 22};
+  for (std::size_t z = 0; z < 24; ++z) {
+    if (rings.count(z)) EXPECT_GT(g.at(50, 5, z), 0.5f) << "ring at layer " << z;
+    else EXPECT_EQ(g.at(50, 5, z), 0.5f) << "between rings, layer " << z;
+    EXPECT_EQ(g.at(51, 5, z), 0.5f) << "behind the face, layer " << z;
+  }
+}
+
+namespace {
+
+Scene small_building() { return make_scene("building", Dims{200, 150, 30}, 0.1); }
+
+ScanConfig building_config() {
+  ScanConfig c;
+  c.mode = ScanMode::rings;
+  c.max_range = 25;  // the command's default for the building
+  return c;
+}
+
+std::uint16_t object_id(const Scene& s, const std::string& name) {
+  for (std::size_t k = 0; k < s.objects.size(); ++k)
+    if (s.objects[k] == name) return static_cast<std::uint16_t>(k + 1);
+  ADD_FAILURE() << "no object " << name;
+  return 0;
+}
+
+// The simulation, its truth and both segmentations, computed once for the tests below.
+class SimBuilding : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    scene_ = new Scene(small_building());
+    const ScanConfig c = building_config();
+    const Grid map = simulate_map(*scene_, c);
+    truth_ = new Truth(ground_truth(*scene_, c));
+    after_ = new Result(segment(map, Params::defaults()));
+    Params off = Params::defaults();
+    for (const char* p : {"object_gap", "min_object_voxels", "min_pocket_voxels", "surface_band", "structure_planes"})
+      set_param(off, p, "0");
+    before_ = new Result(segment(map, off));
+  }
+  static void TearDownTestSuite() {
+    delete scene_;
+    delete truth_;
+    delete after_;
+    delete before_;
+  }
+  static Scores score(const Result& r) {
+    std::vector<State> states;
+    for (const Segment& s : r.segments) states.push_back(s.state);
+    return score_segmentation(*truth_, r.labels, states);
+  }
+  // For each occupied segment: its voxels inside each solid (truth.objects), by object id.
+  static std::map<std::uint32_t, std::map<std::uint16_t, std::uint64_t>> solid_voxels(const Result& r) {
+    std::map<std::uint32_t, std::map<std::uint16_t, std::uint64_t>> out;
+    for (std::size_t i = 0; i < truth_->objects.size(); ++i) {
+      const std::uint32_t l = r.labels[i];
+      if (r.segments[l].state == State::occupied && truth_->objects[i] != 0) ++out[l][truth_->objects[i]];
+    }
+    return out;
+  }
+  // The occupied segment holding most of object `id`'s solid voxels labelled occupied.
+  static std::uint32_t main_segment(const Result& r, std::uint16_t id) {
+    std::uint32_t best = 0;
+    std::uint64_t most = 0;
+    for (const auto& [seg, per] : solid_voxels(r)) {
+      const auto it = per.find(id);
+      if (it != per.end() && it->second > most) most = it->second, best = seg;
+    }
+    return best;
+  }
+  static Scene* scene_;
+  static Truth* truth_;
+  static Result* after_;
+  static Result* before_;
+};
+Scene* SimBuilding::scene_ = nullptr;
+Truth* SimBuilding::truth_ = nullptr;
+Result* SimBuilding::after_ = nullptr;
+Result* SimBuilding::before_ = nullptr;
+
+}  // namespace
+
+// Hand-checkable layout: the shell (object 1) fills the bottom and top layers (the 10 cm slabs,
+// grown to two voxels about 0.05 and 2.95 m), ten pieces of furniture, seven all-round sensors
+// each in free space.
+TEST_F(SimBuilding, LayoutIsAShellTenPiecesOfFurnitureAndSevenLidars) {
+  ASSERT_EQ(scene_->objects.size(), 11u);
+  EXPECT_EQ(scene_->objects[0], "shell (floor, ceiling, walls)");
+  const std::size_t nx = 200, ny = 150, nz = 30;
+  for (std::size_t y = 0; y < ny; ++y)
+    for (std::size_t x = 0; x < nx; ++x) {
+      ASSERT_EQ(truth_->objects[x + nx * y], 1u) << "floor slab at " << x << ", " << y;
+      ASSERT_EQ(truth_->objects[x + nx * (y + ny * (nz - 1))], 1u) << "ceiling slab at " << x << ", " << y;
+    }
+  ASSERT_EQ(scene_->viewpoints.size(), 7u);
+  for (const Viewpoint& v : scene_->viewpoints) {
+    EXPECT_EQ(v.fov_deg, 360);
+    EXPECT_NEAR(v.position[2], 1.3, 1e-9);  // 1.2 m above the 10 cm floor slab
+    const std::size_t i = std::size_t(v.position[0] / 0.1) + nx * (std::size_t(v.position[1] / 0.1) + ny * 13);
+    EXPECT_EQ(truth_->objects[i], 0u) << "a sensor inside a solid";
+  }
+}
+
+// Without the rules the rings leave the shell in pieces (the issue's real building: thousands of
+// occupied fragments); with the default preset one structure segment holds nearly all of it and
+// the free-standing box and cabinets are objects of their own.
+TEST_F(SimBuilding, DefaultPresetJoinsTheRingsIntoOneStructure) {
+  const Scores b = score(*before_), a = score(*after_);
+  ASSERT_EQ(a.objects.size(), 11u);
+  EXPECT_GT(b.objects[0].segments, 100u) << "the rings are fragments without the rules";
+  EXPECT_GT(b.segments, 1000u);
+  EXPECT_LE(a.segments, 100u);
+  EXPECT_GE(a.objects[0].largest_share, 0.9);
+  const std::uint32_t shell = main_segment(*after_, 1);
+  EXPECT_EQ(after_->segments[shell].kind, Kind::structure);
+  EXPECT_LE(a.object_free_share, 0.005);
+  for (const char* name : {"box, room 1", "cabinet, room 3"}) {
+    const std::uint16_t id = object_id(*scene_, name);
+    EXPECT_EQ(a.objects[id - 1].segments, 1u) << name;
+    const std::uint32_t seg = main_segment(*after_, id);
+    EXPECT_NE(seg, shell) << name;
+    EXPECT_EQ(after_->segments[seg].kind, Kind::object) << name;
+  }
+}
+
+// The targets of issue 23 on the building (what the brief asks), not met by the default preset
+// today (docs/experiments.md, "A simulated building"): tables and boxes standing on the floor
+// stay in the structure segment, pieces of walls and ceiling come out as objects.
+TEST_F(SimBuilding, DISABLED_EveryPieceOfFurnitureIsOneObjectAndTheShellIsStructure) {
+  const Scores a = score(*after_);
+  EXPECT_EQ(a.spanning_segments, 0u);
+  const std::uint32_t shell = main_segment(*after_, 1);
+  for (std::uint16_t id = 2; id <= scene_->objects.size(); ++id) {
+    EXPECT_EQ(a.objects[id - 1].segments, 1u) << scene_->objects[id - 1];
+    const std::uint32_t seg = main_segment(*after_, id);
+    EXPECT_NE(seg, shell) << scene_->objects[id - 1] << " is part of the structure";
+    EXPECT_EQ(after_->segments[seg].kind, Kind::object) << scene_->objects[id - 1];
+  }
+  for (const auto& [seg, per] : solid_voxels(*after_))
+    if (per.count(1) && per.size() == 1)
+      EXPECT_EQ(after_->segments[seg].kind, Kind::structure) << "segment " << seg << " holds only the shell";
+}
