@@ -3,14 +3,17 @@
 simulated scenes: the columns of docs/experiments.md, "Objects, speckles, pockets".
 
 usage: scripts/scene-report.py [--build build] [--work DIR] [--real-only | --sim-only] [--sim-dims NX NY NZ]
-                               [--before NAME=VALUE,...]
+                               [--before NAME=VALUE,...] [--scenes NAME,...] [--reuse]
 
 "before" is the default preset with the rules off (object_gap=0, min_object_voxels=0,
 min_pocket_voxels=0, surface_band=0, structure_planes=0: the labels of the default preset before the rules); "after"
 is the default preset as it is. `--before surface_band=0` compares with the default preset
 without the surface band (rule 10), `--before structure_planes=0` without rule 11
 (docs/experiments.md, "The surface band", "Structure and objects"). Real files are read from
-../shared/data/ (relative to the repository root)."""
+../shared/data/ (relative to the repository root). `--scenes building` reports the simulated
+building (its own dims, 5 cm voxels and rings scans unless --sim-dims is given; docs/experiments.md,
+"A simulated building"); `--reuse` keeps simulations already in --work (WORK/sim-SCENE) instead of
+simulating again."""
 import argparse
 import json
 import os
@@ -91,17 +94,20 @@ def score(tool, truth, labels=None, segments=None, method=None):
     return json.loads(run(cmd))["results"][0]["scores"]
 
 
-def simulated(tool, work, dims, before=OFF):
+def simulated(tool, work, dims, before=OFF, scenes=SCENES, reuse=False):
     print("| scene | method | segments | occupied segments per object | spanning | object voxels labelled free "
           "| IoU free / unknown / occupied | structure / object / clutter | free/unknown of <= 8 voxels |")
     print("|---|---|---|---|---|---|---|---|---|")
-    for scene in SCENES:
+    for scene in scenes:
         truth = os.path.join(work, "sim-" + scene)
-        run([tool, "simulate", "--scene", scene, "--out", truth] + (["--dims"] + dims if dims else []))
+        if not (reuse and os.path.exists(os.path.join(truth, "scene.json"))):
+            run([tool, "simulate", "--scene", scene, "--out", truth] + (["--dims"] + dims if dims else []))
+        with open(os.path.join(truth, "scene.json")) as f:
+            voxel = "%.17g" % json.load(f)["voxel_size"]
         rows = []
         for label, params in (("before", before), ("after", [])):
             out = os.path.join(work, "seg-" + scene + "-" + label)
-            segs = segment(tool, os.path.join(truth, "map.npy"), ["--voxel-size", "0.04"] + params, out,
+            segs = segment(tool, os.path.join(truth, "map.npy"), ["--voxel-size", voxel] + params, out,
                            "labels.npy,segments.json")
             s = score(tool, truth, os.path.join(out, "labels.npy"), os.path.join(out, "segments.json"))
             rows.append((label, s, table_columns(segs)))
@@ -123,6 +129,8 @@ def main():
     ap.add_argument("--real-only", action="store_true")
     ap.add_argument("--sim-only", action="store_true")
     ap.add_argument("--sim-dims", nargs=3)
+    ap.add_argument("--scenes", help="simulated scenes, NAME,... (default: the six room scenes)")
+    ap.add_argument("--reuse", action="store_true", help="keep simulations already in --work")
     ap.add_argument("--before", help="parameters of the 'before' run, NAME=VALUE,... (default: the object rules off)")
     a = ap.parse_args()
     before = OFF
@@ -138,7 +146,7 @@ def main():
             real(tool, work, before)
             print()
         if not a.real_only:
-            simulated(tool, work, a.sim_dims, before)
+            simulated(tool, work, a.sim_dims, before, a.scenes.split(",") if a.scenes else SCENES, a.reuse)
 
 
 if __name__ == "__main__":

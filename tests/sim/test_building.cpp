@@ -133,22 +133,26 @@ Result* SimBuilding::before_ = nullptr;
 // Hand-checkable layout: the shell (object 1) fills the bottom and top layers (the 10 cm slabs,
 // grown to two voxels about 0.05 and 2.95 m), ten pieces of furniture, seven all-round sensors
 // each in free space.
-TEST_F(SimBuilding, LayoutIsAShellTenPiecesOfFurnitureAndSevenLidars) {
-  ASSERT_EQ(scene_->objects.size(), 11u);
-  EXPECT_EQ(scene_->objects[0], "shell (floor, ceiling, walls)");
+TEST(SimBuildingScene, LayoutIsAShellTenPiecesOfFurnitureAndSevenLidars) {
+  const Scene scene = small_building();
+  const std::vector<std::uint16_t> objects = object_mask(scene);
+  ASSERT_EQ(scene.objects.size(), 11u);
+  EXPECT_EQ(scene.objects[0], "shell (floor, ceiling, walls)");
   const std::size_t nx = 200, ny = 150, nz = 30;
   for (std::size_t y = 0; y < ny; ++y)
     for (std::size_t x = 0; x < nx; ++x) {
-      ASSERT_EQ(truth_->objects[x + nx * y], 1u) << "floor slab at " << x << ", " << y;
-      ASSERT_EQ(truth_->objects[x + nx * (y + ny * (nz - 1))], 1u) << "ceiling slab at " << x << ", " << y;
+      ASSERT_EQ(objects[x + nx * y], 1u) << "floor slab at " << x << ", " << y;
+      ASSERT_EQ(objects[x + nx * (y + ny * (nz - 1))], 1u) << "ceiling slab at " << x << ", " << y;
     }
-  ASSERT_EQ(scene_->viewpoints.size(), 7u);
-  for (const Viewpoint& v : scene_->viewpoints) {
+  ASSERT_EQ(scene.viewpoints.size(), 7u);
+  for (const Viewpoint& v : scene.viewpoints) {
     EXPECT_EQ(v.fov_deg, 360);
     EXPECT_NEAR(v.position[2], 1.3, 1e-9);  // 1.2 m above the 10 cm floor slab
     const std::size_t i = std::size_t(v.position[0] / 0.1) + nx * (std::size_t(v.position[1] / 0.1) + ny * 13);
-    EXPECT_EQ(truth_->objects[i], 0u) << "a sensor inside a solid";
+    EXPECT_EQ(objects[i], 0u) << "a sensor inside a solid";
   }
+  for (std::uint16_t id = 1; id <= 11; ++id)
+    EXPECT_NE(std::find(objects.begin(), objects.end(), id), objects.end()) << scene.objects[id - 1] << " has no voxel";
 }
 
 // Without the rules the rings leave the shell in pieces (the real building: thousands of
@@ -184,7 +188,9 @@ TEST_F(SimBuilding, DISABLED_EveryPieceOfFurnitureIsOneObjectAndTheShellIsStruct
     EXPECT_EQ(a.objects[id - 1].segments, 1u) << scene_->objects[id - 1];
     const std::uint32_t seg = main_segment(*after_, id);
     EXPECT_NE(seg, shell) << scene_->objects[id - 1] << " is part of the structure";
-    EXPECT_EQ(after_->segments[seg].kind, Kind::object) << scene_->objects[id - 1];
+    // A table's top is a support plane: rule 9 may call the table structure; the rest are objects.
+    if (scene_->objects[id - 1].rfind("table", 0) != 0)
+      EXPECT_EQ(after_->segments[seg].kind, Kind::object) << scene_->objects[id - 1];
   }
   for (const auto& [seg, per] : solid_voxels(*after_))
     if (per.count(1) && per.size() == 1)
