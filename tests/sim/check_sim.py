@@ -89,6 +89,20 @@ r = run("evaluate", "--truth", a, "--labels", os.path.join(work, "big_labels.npy
 assert r.returncode == 2 and "label 1000000" in r.stderr, r.stderr
 r = run("evaluate", "--truth", a, "--labels", os.path.join(seg, "labels.npy"))
 assert r.returncode == 1 and "--segments" in r.stderr, r.stderr
+# The building takes its own defaults for what is not given: rings scans, 25 m range, 5 cm voxels
+# (here --dims is given: a 3.2 x 2.4 x 0.6 m storey at scale 0.16, a quick map).
+r = run("simulate", "--scene", "building", "--dims", "64", "48", "12", "--out", os.path.join(work, "bld"))
+assert r.returncode == 0, r.stderr
+doc = json.load(open(os.path.join(work, "bld", "scene.json")))
+assert doc["construction"] == "rings" and doc["voxel_size"] == 0.05 and doc["dims"] == [64, 48, 12], doc
+assert doc["sensor"]["max_range"] == 25 and doc["sensor"]["ring_step_deg"] == 3, doc["sensor"]
+assert len(doc["viewpoints"]) == 7 and len(doc["objects"]) == 11
+r = run("simulate", "--scene", "building", "--dims", "64", "48", "12", "--mode", "full3d", "--max-range", "8", "--angle-step", "3",
+        "--out", os.path.join(work, "bld3"))
+assert r.returncode == 0, r.stderr
+doc = json.load(open(os.path.join(work, "bld3", "scene.json")))
+assert doc["construction"] == "full3d" and doc["sensor"]["max_range"] == 8 and "ring_step_deg" not in doc["sensor"]
+
 print("cli simulate/evaluate: all checks passed")
 
 # figures: scores and a PNG picture for a small scene.
