@@ -2,6 +2,7 @@
 #include "occseg/sim/truth.hpp"
 
 #include <cmath>
+#include <limits>
 
 #include "occseg/params.hpp"
 #include "occseg/parallel.hpp"
@@ -46,6 +47,38 @@ std::vector<std::uint8_t> surface_voxels(const Scene& scene, int threads) {
         }
   });
   return out;
+}
+
+// first_hit(scene, o, d) <= t_max, stopping at the first solid met within t_max.
+bool hit_within(const Scene& scene, const Vec3& o, const Vec3& d, double t_max) {
+  for (const Shape& s : scene.shapes)
+    if (intersect(s, o, d) <= t_max) return true;
+  return false;
+}
+
+// Whether the first solid met by the ray o + t d lies within max_range and inside the box
+// [bl, bh]: first_hit, then the point o + t d tested against the box. The solids are scanned as
+// first_hit does, but the scan stops once a solid is met before the box along an axis on which
+// the ray moves towards it: the first hit's t is no larger, and o_k + t d_k is monotonic in t in
+// floating point too, so that point lies before the box as well and the answer is the same.
+bool first_hit_in_box(const Scene& scene, const Vec3& o, const Vec3& d, const Vec3& bl, const Vec3& bh,
+                      double max_range) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const Shape& s : scene.shapes) {
+    const double t = intersect(s, o, d);
+    if (!(t < best)) continue;
+    best = t;
+    for (int k = 0; k < 3; ++k) {
+      const double h = o[k] + t * d[k];
+      if ((d[k] > 0 && h < bl[k]) || (d[k] < 0 && h > bh[k])) return false;
+    }
+  }
+  if (!(best <= max_range)) return false;
+  for (int k = 0; k < 3; ++k) {
+    const double h = o[k] + best * d[k];
+    if (!(h >= bl[k] && h <= bh[k])) return false;
+  }
+  return true;
 }
 
 }  // namespace
@@ -98,6 +131,10 @@ Truth ground_truth(const Scene& scene, const ScanConfig& config) {
           const Vec3 lo = voxel_point(f, double(x), double(y), double(z));
           // Same arithmetic as sensor_position, so a planar sensor and its layer's centres agree in z.
           const Vec3 c = voxel_point(f, x + 0.5, y + 0.5, z + 0.5);
+          // The voxel's box, a hair wider (a hit on its face counts).
+          const double eps = 1e-9 * vs;
+          const Vec3 bl = {lo[0] - eps, lo[1] - eps, lo[2] - eps};
+          const Vec3 bh = {lo[0] + vs + eps, lo[1] + vs + eps, lo[2] + vs + eps};
           bool occupied = false, free = false;
           // Only a voxel the surface may cross can become occupied; others stop once seen free.
           for (std::size_t k = 0; k < sensors.size() && !occupied && !(free && !surface[i]); ++k) {
@@ -111,12 +148,7 @@ Truth ground_truth(const Scene& scene, const ScanConfig& config) {
                 if (len == 0) continue;
                 for (double& e : d) e /= len;
                 if (!in_view(v, config.mode, d)) continue;
-                const double th = first_hit(scene, s, d);
-                if (!(th <= config.max_range)) continue;
-                const Vec3 h = {s[0] + th * d[0], s[1] + th * d[1], s[2] + th * d[2]};
-                const double eps = 1e-9 * vs;
-                if (h[0] >= lo[0] - eps && h[0] <= lo[0] + vs + eps && h[1] >= lo[1] - eps &&
-                    h[1] <= lo[1] + vs + eps && h[2] >= lo[2] - eps && h[2] <= lo[2] + vs + eps) {
+                if (first_hit_in_box(scene, s, d, bl, bh, config.max_range)) {
                   occupied = true;
                   break;
                 }
@@ -132,7 +164,7 @@ Truth ground_truth(const Scene& scene, const ScanConfig& config) {
             }
             for (double& e : d) e /= len;
             if (!in_view(v, config.mode, d)) continue;
-            free = first_hit(scene, s, d) > len;
+            free = !hit_within(scene, s, d, len);
           }
           t.state[i] = static_cast<std::uint8_t>(occupied ? State::occupied : free ? State::free : State::unknown);
         }
