@@ -16,6 +16,7 @@
 
 using occseg::Error;
 using occseg::Status;
+using occseg::capi::copy_text;
 using occseg::capi::guard;
 using occseg::capi::index_out_of_range;
 using occseg::capi::require;
@@ -31,20 +32,6 @@ void builtin_io_quietly() noexcept {
     occseg::capi::register_builtin_io();
   } catch (...) {
   }
-}
-
-// snprintf-like copy (see occseg_params_get in occseg.h).
-void copy_text(const std::string& text, char* buf, std::size_t size, std::size_t* length) {
-  if (length) *length = text.size();
-  if (!buf && size == 0) {
-    require(length, "length");
-    return;
-  }
-  require(buf, "buf");
-  if (size < text.size() + 1)
-    throw Error(Status::out_of_range, "buffer of " + std::to_string(size) + " bytes is too small for '" + text +
-                                          "' (needs " + std::to_string(text.size() + 1) + ")");
-  std::memcpy(buf, text.c_str(), text.size() + 1);
 }
 
 const occseg::PluginInfo* plugin_at(uint32_t index) {

@@ -37,6 +37,17 @@ void fill_info(const occseg::Segment& s, occseg_segment_info& info) {
     info.kind = static_cast<occseg_kind>(s.kind);
 }
 
+// The start of every occseg_result_*_view: `out` and `count` cleared first (a failed call
+// leaves no stale view behind), then the three pointers checked.
+template <class T>
+void start_view(const occseg_result* result, const T** out, std::size_t* count) {
+  if (out) *out = nullptr;
+  if (count) *count = 0;
+  require(result, "result");
+  require(out, "out");
+  require(count, "count");
+}
+
 // The body of occseg_segment and occseg_context_segment (context: NULL for none).
 void run_segment(occseg_result** out, occseg::Context* context, const occseg_map* map, const occseg_params* params) {
   require(out, "out");
@@ -147,11 +158,7 @@ int occseg_result_states(const occseg_result* result, uint8_t* out, size_t count
 
 int occseg_result_labels_view(const occseg_result* result, const uint32_t** out, size_t* count) {
   return guard("occseg_result_labels_view", [&] {
-    if (out) *out = nullptr;
-    if (count) *count = 0;
-    require(result, "result");
-    require(out, "out");
-    require(count, "count");
+    start_view(result, out, count);
     *out = result->result.labels.data();
     *count = result->result.labels.size();
   });
@@ -159,11 +166,7 @@ int occseg_result_labels_view(const occseg_result* result, const uint32_t** out,
 
 int occseg_result_states_view(const occseg_result* result, const uint8_t** out, size_t* count) {
   return guard("occseg_result_states_view", [&] {
-    if (out) *out = nullptr;
-    if (count) *count = 0;
-    require(result, "result");
-    require(out, "out");
-    require(count, "count");
+    start_view(result, out, count);
     // Made once (call_once: readers on several threads at once are allowed); a failed
     // allocation leaves it to be tried again by the next call.
     auto* r = const_cast<occseg_result*>(result);
@@ -175,11 +178,7 @@ int occseg_result_states_view(const occseg_result* result, const uint8_t** out, 
 
 int occseg_result_segments_view(const occseg_result* result, const occseg_segment_info** out, size_t* count) {
   return guard("occseg_result_segments_view", [&] {
-    if (out) *out = nullptr;
-    if (count) *count = 0;
-    require(result, "result");
-    require(out, "out");
-    require(count, "count");
+    start_view(result, out, count);
     auto* r = const_cast<occseg_result*>(result);
     std::call_once(r->table_once, [r] {
       std::vector<occseg_segment_info> t(r->result.segments.size());
