@@ -21,6 +21,12 @@ void check_capacity(const occseg_result* r, std::size_t count) {
                                           std::to_string(n) + " voxels of the result");
 }
 
+// Throws Error(out_of_range) "index I is out of range (the result has N <what>)".
+[[noreturn]] void out_of_result(std::size_t index, std::size_t count, const char* what) {
+  throw Error(Status::out_of_range, "index " + std::to_string(index) + " is out of range (the result has " +
+                                        std::to_string(count) + " " + what + ")");
+}
+
 // The fields of `info` after struct_size, from a segment.
 void fill_info(const occseg::Segment& s, occseg_segment_info& info) {
   info.id = s.id;
@@ -129,9 +135,7 @@ int occseg_result_segment(const occseg_result* result, uint32_t index, occseg_se
                                                 " nor the size before 'kind', " +
                                                 std::to_string(OCCSEG_SEGMENT_INFO_SIZE_V1));
     const auto& segs = result->result.segments;
-    if (index >= segs.size())
-      throw Error(Status::out_of_range, "index " + std::to_string(index) + " is out of range (the result has " +
-                                            std::to_string(segs.size()) + " segments)");
+    if (index >= segs.size()) out_of_result(index, segs.size(), "segments");
     fill_info(segs[index], *out);
   });
 }
@@ -207,9 +211,7 @@ int occseg_result_stage(const occseg_result* result, uint32_t index, const char*
   return guard("occseg_result_stage", [&] {
     require(result, "result");
     const auto& t = result->result.timings;
-    if (index >= t.size())
-      throw Error(Status::out_of_range, "index " + std::to_string(index) + " is out of range (the result has " +
-                                            std::to_string(t.size()) + " stages)");
+    if (index >= t.size()) out_of_result(index, t.size(), "stages");
     if (stage) *stage = t[index].stage.c_str();
     if (seconds) *seconds = t[index].seconds;
   });
