@@ -1,10 +1,13 @@
 // The built-in map readers and writers (.npy, .nrrd; map_server .yaml maps are read only),
-// registered as the plugin "builtin_io" through the plugin host table when the program or library
-// holding this object starts, so that occseg_map_read / occseg_map_write find them by extension
-// like any plugin's.
+// registered as the plugin "builtin_io" through the plugin host table by register_builtin_io
+// (builtin_io.hpp), so that occseg_map_read / occseg_map_write find them by extension like any
+// plugin's.
+#include "builtin_io.hpp"
+
 #include <cstdlib>
 #include <cstring>
 #include <exception>
+#include <mutex>
 #include <string>
 
 #include "occseg/error.hpp"
@@ -145,10 +148,12 @@ const occseg_plugin_descriptor kBuiltinIo = {
     OCCSEG_PLUGIN_ABI_MAJOR, OCCSEG_PLUGIN_ABI_MINOR, sizeof(occseg_plugin_descriptor), "builtin_io",
     OCCSEG_VERSION_STRING, "built-in map readers and writers (.npy, .nrrd; .yaml read)", register_io};
 
-// Registered when the binary holding this object is loaded (before main / dlopen returns).
-[[maybe_unused]] const bool kRegistered = (occseg::register_static_plugin(&kBuiltinIo), true);
-
 }  // namespace
+
+void occseg::capi::register_builtin_io() {
+  static std::once_flag once;
+  std::call_once(once, [] { occseg::register_static_plugin(&kBuiltinIo); });
+}
 
 std::string& occseg::capi::nrrd_space_slot() {
   thread_local std::string space;

@@ -2,7 +2,6 @@
 // the readers' own scan layer (ScanBounds, ScanFusion of adapters/scan), so an array gives the
 // map a .pcd file of the same points gives; and each input point's segment.
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -15,17 +14,11 @@
 using occseg::Error;
 using occseg::Status;
 using occseg::capi::guard;
+using occseg::capi::invalid;
+using occseg::capi::number;
 using occseg::capi::require;
 
 namespace {
-
-[[noreturn]] void invalid(const std::string& message) { throw Error(Status::invalid_argument, message); }
-
-std::string number(double v) {
-  char t[64];
-  std::snprintf(t, sizeof t, "%.17g", v);
-  return t;
-}
 
 // One scan as the caller passed it, copied packed (x, y, z of T per point): the caller's memory
 // is read once, here, at any alignment and stride.

@@ -2,17 +2,16 @@
 // turns C++ exceptions into status codes, so no exception ever crosses the C ABI.
 #pragma once
 #include <array>
+#include <cstdio>
 #include <cstring>
-#include <mutex>
-#include <vector>
 #include <exception>
 #include <functional>
 #include <mutex>
-#include <vector>
 #include <new>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <vector>
 
 #include "occseg/boxes.hpp"
 #include "occseg/context.hpp"
@@ -98,6 +97,32 @@ int enum_value(const E& e) noexcept {
 // Throws Error(invalid_argument) "argument 'name' is NULL" when p is NULL.
 inline void require(const void* p, const char* name) {
   if (!p) throw Error(Status::invalid_argument, std::string("argument '") + name + "' is NULL");
+}
+
+// Throws Error(invalid_argument) with `message`.
+[[noreturn]] inline void invalid(const std::string& message) { throw Error(Status::invalid_argument, message); }
+
+// `v` as printf's %.<digits>g writes it: 17 digits round-trip a double; "nan", "inf" as they are.
+inline std::string number(double v, int digits = 17) {
+  char t[64];
+  std::snprintf(t, sizeof t, "%.*g", digits, v);
+  return t;
+}
+
+// Copies `text` into a caller's buffer, snprintf-like (see occseg_params_get in occseg.h): the
+// length always goes to `length` when given; buf NULL with size 0 is a pure length query (which
+// then needs `length`); a buffer too small is Error(out_of_range) and is left as it was.
+inline void copy_text(const std::string& text, char* buf, std::size_t size, std::size_t* length) {
+  if (length) *length = text.size();
+  if (!buf && size == 0) {
+    require(length, "length");
+    return;
+  }
+  require(buf, "buf");
+  if (size < text.size() + 1)
+    throw Error(Status::out_of_range, "buffer of " + std::to_string(size) + " bytes is too small for '" + text +
+                                          "' (needs " + std::to_string(text.size() + 1) + ")");
+  std::memcpy(buf, text.c_str(), text.size() + 1);
 }
 
 // Throws Error(out_of_range) "index I is out of range (there are N <what>)".

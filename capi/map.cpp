@@ -2,7 +2,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -18,11 +17,11 @@ using occseg::Dims;
 using occseg::Error;
 using occseg::Status;
 using occseg::capi::guard;
+using occseg::capi::invalid;
+using occseg::capi::number;
 using occseg::capi::require;
 
 namespace {
-
-[[noreturn]] void invalid(const std::string& message) { throw Error(Status::invalid_argument, message); }
 
 std::size_t item_size(int dtype) {
   switch (dtype) {
@@ -36,11 +35,8 @@ std::size_t item_size(int dtype) {
 }
 
 void check_voxel_size(double v) {
-  if (!(v > 0) || !std::isfinite(v)) {
-    char t[64];
-    std::snprintf(t, sizeof t, "%g", v);
-    throw Error(Status::bad_value, std::string("voxel_size ") + t + " is not a positive finite number");
-  }
+  if (!(v > 0) || !std::isfinite(v))
+    throw Error(Status::bad_value, "voxel_size " + number(v, 6) + " is not a positive finite number");
 }
 
 // Rejects strides under which two voxels would share bytes, or whose extent overflows
@@ -80,13 +76,11 @@ T load(const char* p) {
 
 [[noreturn]] void bad_value(std::size_t x, std::size_t y, std::size_t z, double v) {
   const char* what = std::isnan(v) ? "is NaN" : (std::isinf(v) ? "is infinite" : "is outside [0, 1]");
-  char t[64];
-  std::snprintf(t, sizeof t, "%.9g", v);
   // The one flag that accepts this value (the Python bindings put their keyword in its place).
   const char* fix = std::isnan(v) ? " (pass OCCSEG_IMPORT_NAN_UNKNOWN to read it as unknown)"
                                   : " (pass OCCSEG_IMPORT_CLAMP to clamp it to [0, 1])";
   throw Error(Status::bad_value, "data: probability at voxel (" + std::to_string(x) + ", " + std::to_string(y) +
-                                     ", " + std::to_string(z) + ") = " + t + " " + what + fix);
+                                     ", " + std::to_string(z) + ") = " + number(v, 9) + " " + what + fix);
 }
 
 // One F32/F64 value as a probability, per the import flags.
@@ -321,11 +315,8 @@ int occseg_map_set_origin(occseg_map* map, const double origin[3]) {
     require(map, "map");
     require(origin, "origin");
     for (int k = 0; k < 3; ++k)
-      if (!std::isfinite(origin[k])) {
-        char t[64];
-        std::snprintf(t, sizeof t, "%g", origin[k]);
-        throw Error(Status::bad_value, "origin[" + std::to_string(k) + "] = " + t + " is not finite");
-      }
+      if (!std::isfinite(origin[k]))
+        throw Error(Status::bad_value, "origin[" + std::to_string(k) + "] = " + number(origin[k], 6) + " is not finite");
     occseg::check_geometry(map->grid.dims, map->grid.voxel_size, {origin[0], origin[1], origin[2]});
     std::copy(origin, origin + 3, map->grid.origin.begin());
   });

@@ -2,7 +2,6 @@
 // set_param, get_param) behind typed setters and getters.
 #include <cerrno>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <memory>
@@ -13,13 +12,14 @@
 using occseg::Error;
 using occseg::ParamInfo;
 using occseg::Status;
+using occseg::capi::copy_text;
 using occseg::capi::guard;
 using occseg::capi::index_out_of_range;
+using occseg::capi::invalid;
+using occseg::capi::number;
 using occseg::capi::require;
 
 namespace {
-
-[[noreturn]] void invalid(const std::string& message) { throw Error(Status::invalid_argument, message); }
 
 // Built-in parameters and those plugins declared (occseg/registry.hpp); the reference stays valid.
 const ParamInfo& info_of(const char* name) {
@@ -32,20 +32,6 @@ bool is(const ParamInfo& i, const char* kind) { return std::strcmp(i.kind, kind)
 
 [[noreturn]] void wrong_kind(const ParamInfo& i, const char* use) {
   invalid(std::string("parameter '") + i.name + "' is of kind " + i.kind + "; use " + use);
-}
-
-// snprintf-like copy: see occseg_params_get in occseg.h.
-void copy_text(const std::string& text, char* buf, std::size_t size, std::size_t* length) {
-  if (length) *length = text.size();
-  if (!buf && size == 0) {
-    require(length, "length");  // a pure length query needs somewhere to put the length
-    return;
-  }
-  require(buf, "buf");
-  if (size < text.size() + 1)
-    throw Error(Status::out_of_range, "buffer of " + std::to_string(size) + " bytes is too small for '" + text +
-                                          "' (needs " + std::to_string(text.size() + 1) + ")");
-  std::memcpy(buf, text.c_str(), text.size() + 1);
 }
 
 // Index into the built-in table followed by the declared parameters (a list that only grows).
@@ -110,8 +96,7 @@ int occseg_params_set_double(occseg_params* params, const char* name, double val
     require(params, "params");
     const ParamInfo& i = info_of(name);
     if (is(i, "string")) wrong_kind(i, "occseg_params_set_string");
-    char text[64];
-    std::snprintf(text, sizeof text, "%.17g", value);  // round-trips exactly through strtod
+    const std::string text = number(value);  // 17 digits: round-trips exactly through strtod
     if (!std::isfinite(value)) invalid(std::string("parameter '") + i.name + "': " + text + " is not a finite number");
     occseg::set_param(params->params, i.name, text);
   });

@@ -7,6 +7,7 @@
 #include <mutex>
 #include <string>
 
+#include "builtin_io.hpp"
 #include "internal.hpp"
 #include "occseg/occseg_plugin.h"
 #include "nrrd_space.hpp"
@@ -15,27 +16,26 @@
 
 using occseg::Error;
 using occseg::Status;
+using occseg::capi::copy_text;
 using occseg::capi::guard;
 using occseg::capi::index_out_of_range;
 using occseg::capi::require;
 
 namespace {
 
-// snprintf-like copy (see occseg_params_get in occseg.h).
-void copy_text(const std::string& text, char* buf, std::size_t size, std::size_t* length) {
-  if (length) *length = text.size();
-  if (!buf && size == 0) {
-    require(length, "length");
-    return;
+// Every function here registers the built-in readers and writers before it reads or extends the
+// registry's plugins, readers or writers (builtin_io.hpp); the ones that return a status through
+// register_builtin_io, which throws. Those that return no status call this instead: a failure (out
+// of memory) leaves them listing what is registered, and the next call with a status reports it.
+void builtin_io_quietly() noexcept {
+  try {
+    occseg::capi::register_builtin_io();
+  } catch (...) {
   }
-  require(buf, "buf");
-  if (size < text.size() + 1)
-    throw Error(Status::out_of_range, "buffer of " + std::to_string(size) + " bytes is too small for '" + text +
-                                          "' (needs " + std::to_string(text.size() + 1) + ")");
-  std::memcpy(buf, text.c_str(), text.size() + 1);
 }
 
 const occseg::PluginInfo* plugin_at(uint32_t index) {
+  builtin_io_quietly();
   const auto v = occseg::loaded_plugins();
   return index < v.size() ? v[index] : nullptr;
 }
@@ -55,6 +55,7 @@ bool pick(const std::vector<const T*>& v, uint32_t index, const std::string T::*
 
 // Entries are never removed, so the strings stay valid after the snapshot is gone.
 bool stage_at(int kind, uint32_t index, StageText& out) {
+  builtin_io_quietly();
   switch (kind) {
     case OCCSEG_STAGE_TEXTURE: return pick(occseg::texture_operators(), index, &occseg::TextureOperator::name, out);
     case OCCSEG_STAGE_SIMILARITY: return pick(occseg::similarities(), index, &occseg::Similarity::name, out);
@@ -100,6 +101,7 @@ std::string joined(const std::vector<std::string>& v) {
 // Runs occseg::load_default_plugins() and marks the search path as loaded; with `once`, only if
 // no call has loaded it yet (threads racing to the first read wait for the one that loads).
 occseg::PluginLoadReport load_defaults(bool once) {
+  occseg::capi::register_builtin_io();
   DefaultPlugins& d = default_plugins();
   const std::lock_guard<std::mutex> lock(d.mutex);
   if (once && d.done.load(std::memory_order_relaxed)) return {};
@@ -158,6 +160,7 @@ extern "C" {
 int occseg_plugins_load(const char* path) {
   return guard("occseg_plugins_load", [&] {
     require(path, "path");
+    occseg::capi::register_builtin_io();
     occseg::load_plugin(path);
   });
 }
@@ -179,7 +182,10 @@ int occseg_plugin_search_path(char* buf, size_t size, size_t* length) {
   });
 }
 
-uint32_t occseg_plugin_count(void) { return static_cast<uint32_t>(occseg::loaded_plugins().size()); }
+uint32_t occseg_plugin_count(void) {
+  builtin_io_quietly();
+  return static_cast<uint32_t>(occseg::loaded_plugins().size());
+}
 
 const char* occseg_plugin_name(uint32_t index) {
   const auto* p = plugin_at(index);
@@ -218,6 +224,7 @@ void occseg_plugin_host_abi(uint32_t* major, uint32_t* minor) {
 }
 
 uint32_t occseg_stage_count(occseg_stage_kind kind) {
+  builtin_io_quietly();
   switch (occseg::capi::enum_value(kind)) {
     case OCCSEG_STAGE_TEXTURE: return static_cast<uint32_t>(occseg::texture_operators().size());
     case OCCSEG_STAGE_SIMILARITY: return static_cast<uint32_t>(occseg::similarities().size());
@@ -263,6 +270,7 @@ int occseg_map_read_options(occseg_map** out, const char* path, const char* cons
     require(out, "out");
     *out = nullptr;
     require(path, "path");
+    occseg::capi::register_builtin_io();
     auto m = std::make_unique<occseg_map>();
     const occseg::capi::NrrdSpaceScope space;  // the built-in .nrrd reader reports the file's space
     const std::string ext = occseg::file_extension(path);
@@ -282,6 +290,7 @@ int occseg_map_write_options(const occseg_map* map, const char* path, const char
   return guard("occseg_map_write", [&] {
     require(map, "map");
     require(path, "path");
+    occseg::capi::register_builtin_io();
     const occseg::capi::NrrdSpaceScope space(map->nrrd_space);  // for the built-in .nrrd writer
     const std::string ext = occseg::file_extension(path);
     const std::string hint = occseg::find_writer(ext) ? "" : serve_extension(ext, false);

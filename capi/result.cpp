@@ -21,6 +21,12 @@ void check_capacity(const occseg_result* r, std::size_t count) {
                                           std::to_string(n) + " voxels of the result");
 }
 
+// Throws Error(out_of_range) "index I is out of range (the result has N <what>)".
+[[noreturn]] void out_of_result(std::size_t index, std::size_t count, const char* what) {
+  throw Error(Status::out_of_range, "index " + std::to_string(index) + " is out of range (the result has " +
+                                        std::to_string(count) + " " + what + ")");
+}
+
 // The fields of `info` after struct_size, from a segment.
 void fill_info(const occseg::Segment& s, occseg_segment_info& info) {
   info.id = s.id;
@@ -35,6 +41,17 @@ void fill_info(const occseg::Segment& s, occseg_segment_info& info) {
   // Appended after version 1 (OCCSEG_SEGMENT_INFO_SIZE_V1): filled only for callers whose struct has it.
   if (info.struct_size >= offsetof(occseg_segment_info, kind) + sizeof info.kind)
     info.kind = static_cast<occseg_kind>(s.kind);
+}
+
+// The start of every occseg_result_*_view: `out` and `count` cleared first (a failed call
+// leaves no stale view behind), then the three pointers checked.
+template <class T>
+void start_view(const occseg_result* result, const T** out, std::size_t* count) {
+  if (out) *out = nullptr;
+  if (count) *count = 0;
+  require(result, "result");
+  require(out, "out");
+  require(count, "count");
 }
 
 // The body of occseg_segment and occseg_context_segment (context: NULL for none).
@@ -118,9 +135,7 @@ int occseg_result_segment(const occseg_result* result, uint32_t index, occseg_se
                                                 " nor the size before 'kind', " +
                                                 std::to_string(OCCSEG_SEGMENT_INFO_SIZE_V1));
     const auto& segs = result->result.segments;
-    if (index >= segs.size())
-      throw Error(Status::out_of_range, "index " + std::to_string(index) + " is out of range (the result has " +
-                                            std::to_string(segs.size()) + " segments)");
+    if (index >= segs.size()) out_of_result(index, segs.size(), "segments");
     fill_info(segs[index], *out);
   });
 }
@@ -147,11 +162,7 @@ int occseg_result_states(const occseg_result* result, uint8_t* out, size_t count
 
 int occseg_result_labels_view(const occseg_result* result, const uint32_t** out, size_t* count) {
   return guard("occseg_result_labels_view", [&] {
-    if (out) *out = nullptr;
-    if (count) *count = 0;
-    require(result, "result");
-    require(out, "out");
-    require(count, "count");
+    start_view(result, out, count);
     *out = result->result.labels.data();
     *count = result->result.labels.size();
   });
@@ -159,11 +170,7 @@ int occseg_result_labels_view(const occseg_result* result, const uint32_t** out,
 
 int occseg_result_states_view(const occseg_result* result, const uint8_t** out, size_t* count) {
   return guard("occseg_result_states_view", [&] {
-    if (out) *out = nullptr;
-    if (count) *count = 0;
-    require(result, "result");
-    require(out, "out");
-    require(count, "count");
+    start_view(result, out, count);
     // Made once (call_once: readers on several threads at once are allowed); a failed
     // allocation leaves it to be tried again by the next call.
     auto* r = const_cast<occseg_result*>(result);
@@ -175,11 +182,7 @@ int occseg_result_states_view(const occseg_result* result, const uint8_t** out, 
 
 int occseg_result_segments_view(const occseg_result* result, const occseg_segment_info** out, size_t* count) {
   return guard("occseg_result_segments_view", [&] {
-    if (out) *out = nullptr;
-    if (count) *count = 0;
-    require(result, "result");
-    require(out, "out");
-    require(count, "count");
+    start_view(result, out, count);
     auto* r = const_cast<occseg_result*>(result);
     std::call_once(r->table_once, [r] {
       std::vector<occseg_segment_info> t(r->result.segments.size());
@@ -208,9 +211,7 @@ int occseg_result_stage(const occseg_result* result, uint32_t index, const char*
   return guard("occseg_result_stage", [&] {
     require(result, "result");
     const auto& t = result->result.timings;
-    if (index >= t.size())
-      throw Error(Status::out_of_range, "index " + std::to_string(index) + " is out of range (the result has " +
-                                            std::to_string(t.size()) + " stages)");
+    if (index >= t.size()) out_of_result(index, t.size(), "stages");
     if (stage) *stage = t[index].stage.c_str();
     if (seconds) *seconds = t[index].seconds;
   });

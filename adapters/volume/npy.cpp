@@ -322,36 +322,29 @@ bool read_body(const InputFile& f, std::size_t offset, std::size_t n, const std:
   return ok.load();
 }
 
+std::uint16_t byte_swapped(std::uint16_t v) { return __builtin_bswap16(v); }
+std::uint32_t byte_swapped(std::uint32_t v) { return __builtin_bswap32(v); }
+std::uint64_t byte_swapped(std::uint64_t v) { return __builtin_bswap64(v); }
+
+// Reverses the bytes of each whole element of type U in bytes[0, n), at any alignment.
+template <class U>
+void swap_each(unsigned char* bytes, std::size_t n) {
+  for (std::size_t i = 0; i + sizeof(U) <= n; i += sizeof(U)) {
+    U v;
+    std::memcpy(&v, bytes + i, sizeof v);
+    v = byte_swapped(v);
+    std::memcpy(bytes + i, &v, sizeof v);
+  }
+}
+
 // The elements of a big-endian array in the machine's (little-endian) order.
 void swap_to_little_endian(const NpyArray& a, unsigned char* bytes, std::size_t n) {
   if (!a.big_endian) return;
   switch (item_size(a.descr)) {
-    case 2:
-      for (std::size_t i = 0; i + 2 <= n; i += 2) {
-        std::uint16_t v;
-        std::memcpy(&v, bytes + i, 2);
-        v = __builtin_bswap16(v);
-        std::memcpy(bytes + i, &v, 2);
-      }
-      break;
-    case 4:
-      for (std::size_t i = 0; i + 4 <= n; i += 4) {
-        std::uint32_t v;
-        std::memcpy(&v, bytes + i, 4);
-        v = __builtin_bswap32(v);
-        std::memcpy(bytes + i, &v, 4);
-      }
-      break;
-    case 8:
-      for (std::size_t i = 0; i + 8 <= n; i += 8) {
-        std::uint64_t v;
-        std::memcpy(&v, bytes + i, 8);
-        v = __builtin_bswap64(v);
-        std::memcpy(bytes + i, &v, 8);
-      }
-      break;
-    default:
-      break;
+    case 2: swap_each<std::uint16_t>(bytes, n); break;
+    case 4: swap_each<std::uint32_t>(bytes, n); break;
+    case 8: swap_each<std::uint64_t>(bytes, n); break;
+    default: break;
   }
 }
 

@@ -38,6 +38,17 @@ def as_voxel_array(probabilities, who):
     return arr
 
 
+def _import_args(who, c_function, probabilities, voxel_size, origin, clamp, nan_unknown):
+    """The checked arguments of Map.from_array() and Map.view() (`who`, for the errors; `c_function`,
+    for the array's): the array, the voxel size, the origin (None: not given) and the import flags."""
+    arr = as_voxel_array(probabilities, c_function)
+    vs = real(who, "voxel_size", voxel_size)
+    o = None if origin is None else _origin_arg(who, origin)
+    flags = (_IMPORT_CLAMP if flag(who, "clamp", clamp) else 0) | \
+        (_IMPORT_NAN_UNKNOWN if flag(who, "nan_unknown", nan_unknown) else 0)
+    return arr, vs, o, flags
+
+
 def buffer_args(arr):
     """(data address, occseg_dtype, dims, byte strides) describing ndarray `arr` [z, y, x] or [y, x]
     to occseg_map_from_buffer: x is the last axis, and NumPy's byte strides (negative ones too)
@@ -80,11 +91,8 @@ class Map(Owned):
         np.asarray(msg.data, dtype=np.int8).reshape(msg.info.height, msg.info.width) (row 0 is at
         the origin, y up, as occseg's rows are), with voxel_size=msg.info.resolution and
         origin=(position.x, position.y, 0)."""
-        arr = as_voxel_array(probabilities, "occseg_map_from_buffer")
-        vs = real("occseg.Map.from_array", "voxel_size", voxel_size)
-        o = None if origin is None else _origin_arg("occseg.Map.from_array", origin)
-        flags = (_IMPORT_CLAMP if flag("occseg.Map.from_array", "clamp", clamp) else 0) | \
-            (_IMPORT_NAN_UNKNOWN if flag("occseg.Map.from_array", "nan_unknown", nan_unknown) else 0)
+        arr, vs, o, flags = _import_args("occseg.Map.from_array", "occseg_map_from_buffer", probabilities,
+                                         voxel_size, origin, clamp, nan_unknown)
         data, dtype, dims, strides = buffer_args(arr)
         out = ctypes.c_void_p()
         try:
@@ -105,11 +113,8 @@ class Map(Owned):
         float32 copy the call frees. Needs a liboccseg with occseg_map_view_buffer."""
         if not has("occseg_map_view_buffer"):
             raise OccsegError(Status.EUNSUPPORTED, "occseg.Map.view: the loaded liboccseg has no occseg_map_view_buffer")
-        arr = as_voxel_array(probabilities, "occseg_map_view_buffer")
-        vs = real("occseg.Map.view", "voxel_size", voxel_size)
-        o = None if origin is None else _origin_arg("occseg.Map.view", origin)
-        flags = (_IMPORT_CLAMP if flag("occseg.Map.view", "clamp", clamp) else 0) | \
-            (_IMPORT_NAN_UNKNOWN if flag("occseg.Map.view", "nan_unknown", nan_unknown) else 0)
+        arr, vs, o, flags = _import_args("occseg.Map.view", "occseg_map_view_buffer", probabilities, voxel_size,
+                                         origin, clamp, nan_unknown)
         data, dtype, dims, strides = buffer_args(arr)
         out = ctypes.c_void_p()
         check(lib.occseg_map_view_buffer(ctypes.byref(out), data, dtype, dims, strides, vs, flags))

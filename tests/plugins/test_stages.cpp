@@ -11,6 +11,7 @@
 #include <sys/stat.h>
 #include <thread>
 
+#include "builtin_io.hpp"
 #include "occseg/error.hpp"
 #include "stages/histogram.hpp"
 #include "occseg/plugin_host.hpp"
@@ -387,4 +388,12 @@ TEST(Registry, RegistrationWhileSegmenting) {
   EXPECT_EQ(similarities().size(), before + 40);
   ASSERT_NE(find_similarity("race_39"), nullptr);
   EXPECT_EQ(find_similarity("race_39")->plugin, "race_plugin_39");
+}
+
+// As the occseg command: the built-in readers and writers are registered before any test registers
+// a plugin of its own, so they are the plugin after "builtin" (Registry.BuiltinsAndExtensions).
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  occseg::capi::register_builtin_io();
+  return RUN_ALL_TESTS();
 }

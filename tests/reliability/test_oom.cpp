@@ -1,5 +1,5 @@
 // Out of memory is OCCSEG_ENOMEM, not a crash: children with an address-space limit
-// (RLIMIT_AS) segment a map they cannot afford. Not under sanitizers, whose shadow memory needs
+// (RLIMIT_AS) segment a map they cannot afford (occseg_oom_child, a fresh process each time). Not under sanitizers, whose shadow memory needs
 // the address space and whose allocators abort instead of throwing.
 #include <cstdio>
 #include <cstring>
@@ -31,26 +31,14 @@ std::size_t address_space() {
   return pages * static_cast<std::size_t>(::sysconf(_SC_PAGESIZE));
 }
 
-// In a child: a 96^3 map, then `extra` bytes of address space beyond what is in use, then
-// occseg_segment with 2 threads. Exit 0: OK, 1: ENOMEM with the message, 2+: anything else.
+// occseg_oom_child (oom_child.c) with `extra` bytes of address space beyond what it uses after
+// making its map: a fresh process, forked and exec'd, so that nothing this process allocated and
+// freed before can serve its call. Its exit status: 0 OK, 1 ENOMEM with the message, 2+ anything else.
 int segment_with_headroom(std::size_t extra) {
-  return in_child([extra] {
-    const std::size_t n = 96;
-    const std::vector<float> p = box_map(n);
-    const std::size_t d[3] = {n, n, n};
-    occseg_map* m = nullptr;
-    occseg_params* params = nullptr;
-    if (occseg_map_from_buffer(&m, p.data(), OCCSEG_F32, d, nullptr, 1.0) || occseg_params_create(&params) ||
-        occseg_params_set_int(params, "threads", 2))
-      return 5;
-    const rlimit r{address_space() + extra, address_space() + extra};
-    if (::setrlimit(RLIMIT_AS, &r) != 0) return 6;
-    occseg_result* res = nullptr;
-    const int rc = occseg_segment(&res, m, params);
-    if (rc == OCCSEG_OK) return res ? 0 : 7;
-    if (rc == OCCSEG_ENOMEM && !res && std::strstr(occseg_last_error(), "occseg_segment: out of memory")) return 1;
-    std::fprintf(stderr, "status %d: %s\n", rc, occseg_last_error());
-    return 8;
+  const std::string bytes = std::to_string(extra);
+  return in_child([&bytes] {
+    ::execl(OCCSEG_OOM_CHILD, OCCSEG_OOM_CHILD, bytes.c_str(), static_cast<char*>(nullptr));
+    return 97;  // not started
   });
 }
 

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "builtin_io.hpp"
 #include "commands.hpp"
 #include "occseg/error.hpp"
 #include "occseg/params.hpp"
@@ -51,6 +52,7 @@ void list(std::ostream& out) {
 }  // namespace
 
 void load_cli_plugins() {
+  capi::register_builtin_io();  // first: "builtin_io" owns its extensions before any plugin loads
   const PluginLoadReport r = load_default_plugins();
   for (const auto& e : r.errors) std::cerr << "occseg: warning: " << e << "\n";
 }

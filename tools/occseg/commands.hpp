@@ -20,8 +20,9 @@ Runner add_evaluate(CLI::App& app);
 Runner add_figures(CLI::App& app);
 Runner add_plugins(CLI::App& app);
 
-// Loads the plugins of the search path (OCCSEG_PLUGIN_PATH, <libdir>/occseg/plugins) so their
-// stages, readers and parameters work in every command; failures are warnings on stderr.
+// Registers the built-in readers and writers (plugin builtin_io), then loads the plugins of the
+// search path (OCCSEG_PLUGIN_PATH, <libdir>/occseg/plugins) so their stages, readers and
+// parameters work in every command; failures are warnings on stderr.
 void load_cli_plugins();
 
 }  // namespace occseg::cli

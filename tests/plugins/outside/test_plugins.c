@@ -9,6 +9,8 @@
  *   test_plugins pcd FILE.pcd                 the installed PCL reader plugin
  *   test_plugins auto FILE.bt WORKDIR         no load call: the first read of .bt loads the search path
  *   test_plugins auto_off FILE.bt             the same with OCCSEG_NO_DEFAULT_PLUGINS=1: nothing loads
+ *   test_plugins first_write WORKDIR          the built-in readers/writers serve the first call that uses them
+ *   test_plugins first_load EXAMPLE_SO        ... and are registered before a plugin loaded by the first call
  * The example scenario counts plugins around an explicit load and pins the errors of extensions
  * nothing serves before it, so it runs with OCCSEG_NO_DEFAULT_PLUGINS=1 (tests/plugins/CMakeLists.txt).
  */
@@ -489,6 +491,45 @@ static void auto_off(const char *bt) {
   occseg_map_free(m);
 }
 
+/* Writes `m` to `path` and reads it back: true when the values come back as they were. */
+static int round_trip(const occseg_map *m, const char *path) {
+  static float a[32 * 32 * 32], b[32 * 32 * 32];
+  occseg_map *back = NULL;
+  int same;
+  remove(path);
+  CHECK(occseg_map_write(m, path) == OCCSEG_OK);
+  CHECK(occseg_map_read(&back, path) == OCCSEG_OK);
+  same = back && occseg_map_values(m, a, 32 * 32 * 32) == OCCSEG_OK &&
+         occseg_map_values(back, b, 32 * 32 * 32) == OCCSEG_OK && memcmp(a, b, sizeof a) == 0;
+  occseg_map_free(back);
+  return same;
+}
+
+/* The built-in readers and writers are registered by the library's first use of them, not by a
+ * static initializer (capi/builtin_io.hpp): in this fresh process the first call that touches the
+ * registry writes a .npy, and .npy and .nrrd then round-trip. Nothing else is loaded
+ * (OCCSEG_NO_DEFAULT_PLUGINS=1), so the two built-in plugins are all there is. */
+static void first_write(const char *work) {
+  occseg_map *m = cube_map(0); /* occseg_map_from_buffer: no registry */
+  char path[4096];
+  CHECK(getenv("OCCSEG_NO_DEFAULT_PLUGINS") != NULL);
+  snprintf(path, sizeof path, "%s/first.npy", work);
+  CHECK(round_trip(m, path));
+  snprintf(path, sizeof path, "%s/first.nrrd", work);
+  CHECK(round_trip(m, path));
+  CHECK(occseg_plugin_count() == 2 && find_plugin("builtin") == 0 && find_plugin("builtin_io") == 1);
+  CHECK(find_stage(OCCSEG_STAGE_READER, ".yaml", "builtin_io") && find_stage(OCCSEG_STAGE_WRITER, ".npy", "builtin_io"));
+  occseg_map_free(m);
+}
+
+/* A process whose first call loads a plugin: the built-in readers and writers are registered
+ * before it, so they keep their place after "builtin" and the plugin comes third. */
+static void first_load(const char *so) {
+  CHECK(occseg_plugins_load(so) == OCCSEG_OK);
+  CHECK(find_plugin("builtin") == 0 && find_plugin("builtin_io") == 1 && find_plugin("example") == 2);
+  CHECK(find_stage(OCCSEG_STAGE_READER, ".npy", "builtin_io") && find_stage(OCCSEG_STAGE_READER, ".occtxt", "example"));
+}
+
 int main(int argc, char **argv) {
   if (argc == 4 && strcmp(argv[1], "example") == 0) example(argv[2], argv[3]);
   else if (argc == 3 && strcmp(argv[1], "errors") == 0) errors(argv[2]);
@@ -498,6 +539,8 @@ int main(int argc, char **argv) {
   else if (argc == 3 && strcmp(argv[1], "pcd") == 0) pcd(argv[2]);
   else if (argc == 4 && strcmp(argv[1], "auto") == 0) auto_load(argv[2], argv[3]);
   else if (argc == 3 && strcmp(argv[1], "auto_off") == 0) auto_off(argv[2]);
+  else if (argc == 3 && strcmp(argv[1], "first_write") == 0) first_write(argv[2]);
+  else if (argc == 3 && strcmp(argv[1], "first_load") == 0) first_load(argv[2]);
   else {
     fprintf(stderr, "usage: test_plugins example SO WORKDIR | errors DIR | default | octomap FILE.bt\n");
     return 2;
