@@ -79,6 +79,17 @@ T load(const char* p) {
   return v;
 }
 
+// An item stored in the opposite byte order when `swapped` (OCCSEG_IMPORT_BYTE_SWAPPED).
+template <class T>
+T load(const char* p, bool swapped) {
+  if (!swapped) return load<T>(p);
+  char b[sizeof(T)];
+  for (std::size_t k = 0; k < sizeof(T); ++k) b[k] = p[sizeof(T) - 1 - k];
+  return load<T>(b);
+}
+
+constexpr uint32_t kSwapped = OCCSEG_IMPORT_BYTE_SWAPPED;
+
 [[noreturn]] void bad_value(std::size_t x, std::size_t y, std::size_t z, double v) {
   const char* what = std::isnan(v) ? "is NaN" : (std::isinf(v) ? "is infinite" : "is outside [0, 1]");
   char t[64];
@@ -143,12 +154,13 @@ void convert(float* out, const Dims& d, const char* base, int dtype, const ptrdi
     }
     if (t <= 1 || bad.load()) convert_rows(out, d, base, s, 0, rows, value);
   };
+  const bool sw = flags & kSwapped;
   switch (dtype) {
     case OCCSEG_F32:
-      run([flags](const char* e, std::size_t x, std::size_t y, std::size_t z) { return probability(load<float>(e), flags, x, y, z); });
+      run([flags, sw](const char* e, std::size_t x, std::size_t y, std::size_t z) { return probability(load<float>(e, sw), flags, x, y, z); });
       break;
     case OCCSEG_F64:
-      run([flags](const char* e, std::size_t x, std::size_t y, std::size_t z) { return probability(load<double>(e), flags, x, y, z); });
+      run([flags, sw](const char* e, std::size_t x, std::size_t y, std::size_t z) { return probability(load<double>(e, sw), flags, x, y, z); });
       break;
     // Same conversion as the .npy reader, so both paths give identical maps.
     case OCCSEG_U8:
@@ -158,7 +170,7 @@ void convert(float* out, const Dims& d, const char* base, int dtype, const ptrdi
       run([](const char* e, std::size_t x, std::size_t y, std::size_t z) { return occupancy(load<int8_t>(e), x, y, z); });
       break;
     default:
-      run([](const char* e, std::size_t, std::size_t, std::size_t) { return static_cast<float>(load<uint16_t>(e) / 65535.0); });
+      run([sw](const char* e, std::size_t, std::size_t, std::size_t) { return static_cast<float>(load<uint16_t>(e, sw) / 65535.0); });
       break;
   }
 }
@@ -234,20 +246,21 @@ class BufferSource final : public occseg::MapSource {
   // it has none (an import flag, or the occupancy dtype); else ok = no value refused.
   bool dense_run(const char* e, std::size_t m, float* out, bool& ok) const {
     static const U8Table u8;
+    const bool sw = v_.flags & kSwapped;
     switch (v_.dtype) {
       case OCCSEG_F32:
       case OCCSEG_F64: {
-        if (v_.flags) return false;
+        if (v_.flags & ~kSwapped) return false;
         bool good = true;
         if (v_.dtype == OCCSEG_F32) {
           for (std::size_t x = 0; x < m; ++x) {
-            const float f = load<float>(e + 4 * x);
+            const float f = load<float>(e + 4 * x, sw);
             good &= f >= 0.0f && f <= 1.0f;  // (what probability() accepts without a flag)
             out[x] = f;
           }
         } else {
           for (std::size_t x = 0; x < m; ++x) {
-            const double v = load<double>(e + 8 * x);
+            const double v = load<double>(e + 8 * x, sw);
             good &= v >= 0.0 && v <= 1.0;
             out[x] = static_cast<float>(v);
           }
@@ -259,7 +272,7 @@ class BufferSource final : public occseg::MapSource {
         for (std::size_t x = 0; x < m; ++x) out[x] = u8.p[static_cast<unsigned char>(e[x])];
         return true;
       case OCCSEG_U16:
-        for (std::size_t x = 0; x < m; ++x) out[x] = static_cast<float>(load<uint16_t>(e + 2 * x) / 65535.0);
+        for (std::size_t x = 0; x < m; ++x) out[x] = static_cast<float>(load<uint16_t>(e + 2 * x, sw) / 65535.0);
         return true;
       default:
         return false;
@@ -270,15 +283,16 @@ class BufferSource final : public occseg::MapSource {
   void convert_run_any(float* out, std::size_t i, std::size_t n) const {
     const ptrdiff_t* s = v_.strides;
     const uint32_t flags = v_.flags;
+    const bool sw = flags & kSwapped;
     switch (v_.dtype) {
       case OCCSEG_F32:
-        convert_run(out, d_, v_.data, s, i, n, [flags](const char* e, std::size_t x, std::size_t y, std::size_t z) {
-          return probability(load<float>(e), flags, x, y, z);
+        convert_run(out, d_, v_.data, s, i, n, [flags, sw](const char* e, std::size_t x, std::size_t y, std::size_t z) {
+          return probability(load<float>(e, sw), flags, x, y, z);
         });
         break;
       case OCCSEG_F64:
-        convert_run(out, d_, v_.data, s, i, n, [flags](const char* e, std::size_t x, std::size_t y, std::size_t z) {
-          return probability(load<double>(e), flags, x, y, z);
+        convert_run(out, d_, v_.data, s, i, n, [flags, sw](const char* e, std::size_t x, std::size_t y, std::size_t z) {
+          return probability(load<double>(e, sw), flags, x, y, z);
         });
         break;
       case OCCSEG_U8:
@@ -292,8 +306,8 @@ class BufferSource final : public occseg::MapSource {
         });
         break;
       default:
-        convert_run(out, d_, v_.data, s, i, n, [](const char* e, std::size_t, std::size_t, std::size_t) {
-          return static_cast<float>(load<uint16_t>(e) / 65535.0);
+        convert_run(out, d_, v_.data, s, i, n, [sw](const char* e, std::size_t, std::size_t, std::size_t) {
+          return static_cast<float>(load<uint16_t>(e, sw) / 65535.0);
         });
         break;
     }
@@ -313,7 +327,7 @@ std::unique_ptr<occseg_map> checked_map(occseg_map** out, const void* data, cons
   require(dims, "dims");
   const int dt = occseg::capi::enum_value(dtype);
   const std::size_t item = item_size(dt);
-  if (flags & ~uint32_t(OCCSEG_IMPORT_CLAMP | OCCSEG_IMPORT_NAN_UNKNOWN))
+  if (flags & ~uint32_t(OCCSEG_IMPORT_CLAMP | OCCSEG_IMPORT_NAN_UNKNOWN | OCCSEG_IMPORT_BYTE_SWAPPED))
     invalid("flags " + std::to_string(flags) + " has bits that are no occseg_import_flags");
   const Dims d{dims[0], dims[1], dims[2]};
   occseg::check_dims(d);
@@ -337,12 +351,12 @@ std::unique_ptr<occseg_map> checked_map(occseg_map** out, const void* data, cons
   return m;
 }
 
-// True when the viewed buffer is laid out as a Grid's values: float32, x fastest, dense (the
+// True when the viewed buffer is laid out as a Grid's values: native float32, x fastest, dense (the
 // stride of a one-voxel axis is never used, so any value there is dense).
 bool dense_f32(const occseg_map& m) {
   const Dims& d = m.grid.dims;
   const ptrdiff_t* s = m.view.strides;
-  return m.view.dtype == OCCSEG_F32 && (d.nx == 1 || s[0] == 4) &&
+  return m.view.dtype == OCCSEG_F32 && !(m.view.flags & kSwapped) && (d.nx == 1 || s[0] == 4) &&
          (d.ny == 1 || s[1] == static_cast<ptrdiff_t>(4 * d.nx)) &&
          (d.nz == 1 || s[2] == static_cast<ptrdiff_t>(4 * d.nx * d.ny));
 }
