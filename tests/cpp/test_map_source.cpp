@@ -91,6 +91,15 @@ TEST(MapSource, SegmentThroughASourceIsBitIdenticalAndReadsNoMoreThanAPlaneAtATi
   }
 }
 
+TEST(MapSource, ATextureOperatorThatTakesFloatsGetsTheMapConvertedWhole) {
+  // lbp8 (the 2D operator) is called through the plugin interface, with a float array.
+  const U16Source src(test::random_map(Dims{40, 33, 1}, 5, 0.6));
+  Params p = Params::defaults();
+  p.texture = "lbp8";
+  expect_same(segment(src.floats(), p), segment(src.view(), p));
+  EXPECT_GT(src.largest.load(), 40u);  // converted whole, in runs of many rows (with_float_values)
+}
+
 TEST(MapSource, TheStagesOnTheirOwnReadTheSameValues) {
   const U16Source src(test::random_map(Dims{30, 26, 22}, 7, 0.5));
   const Grid floats = src.floats(), view = src.view();
