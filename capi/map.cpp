@@ -191,14 +191,6 @@ void convert_run(float* out, const Dims& d, const char* base, const ptrdiff_t s[
   }
 }
 
-// The probability of each uint8 value (v / 255 as the conversion computes it).
-struct U8Table {
-  float p[256];
-  U8Table() {
-    for (int v = 0; v < 256; ++v) p[v] = static_cast<float>(v / 255.0);
-  }
-};
-
 // A viewed buffer read through the stages' MapSource: runs of voxels converted as convert() would
 // convert them (the same floats, the same first bad voxel and text), into the stages' scratch.
 // Runs along a dense x of the common dtypes take loops of their own; the rest, and every run with
@@ -256,11 +248,9 @@ class BufferSource final : public occseg::MapSource {
         if (v_.flags & ~kSwapped) return false;
         ok = sw ? float_run<double, true>(e, m, out) : float_run<double, false>(e, m, out);
         return true;
-      case OCCSEG_U8: {
-        static const U8Table u8;
-        for (std::size_t x = 0; x < m; ++x) out[x] = u8.p[static_cast<unsigned char>(e[x])];
+      case OCCSEG_U8:  // (convert()'s expression: the compiler vectorises it)
+        for (std::size_t x = 0; x < m; ++x) out[x] = static_cast<float>(static_cast<unsigned char>(e[x]) / 255.0);
         return true;
-      }
       case OCCSEG_U16:
         if (sw) {
           for (std::size_t x = 0; x < m; ++x) out[x] = static_cast<float>(load<uint16_t>(e + 2 * x, true) / 65535.0);
