@@ -288,7 +288,10 @@ class BufferSource final : public occseg::MapSource {
     }
     return bad == 0;
   }
-  __attribute__((target_clones("avx2", "default"))) static bool f64_run(const char* e, std::size_t m, float* out) {
+#if defined(__x86_64__) && defined(__GNUC__)
+  __attribute__((target_clones("avx2", "default")))
+#endif
+  static bool f64_run(const char* e, std::size_t m, float* out) {
     for (std::size_t x = 0; x < m; ++x) out[x] = static_cast<float>(load<double>(e + 8 * x));
     int64_t bad = 0;
     for (std::size_t x = 0; x < m; ++x) {
