@@ -32,8 +32,8 @@ struct occseg_map {
   std::string nrrd_space;  // the named space of the .nrrd file it was read from; "" otherwise
   // A map made by occseg_map_view_buffer reads the caller's buffer: `grid` then holds the dims,
   // voxel size and origin, grid.p is empty, and grid.borrowed points at the buffer when it is
-  // dense float32 with x fastest (the pipeline reads it as it lies); other buffers are converted
-  // for each call that needs the values (capi::with_values).
+  // dense float32 with x fastest (the pipeline reads it as it lies); the pipeline reads other
+  // buffers through a converter (capi::with_values), a writer's or a plugin's call through a copy.
   struct View {
     const char* data = nullptr;  // voxel (0, 0, 0)
     int dtype = 0;
@@ -131,12 +131,14 @@ inline void copy_text(const std::string& text, char* buf, std::size_t size, std:
                                         std::to_string(count) + " " + what + ")");
 }
 
-// Calls fn(grid) with the map's values as a Grid: the map's own grid, or for a map that views a
-// caller's buffer, a grid that borrows the buffer (dense float32: no copy; the pipeline checks
-// the values as it reads them) or a temporary converted copy (other dtypes and strides; with
-// the import flags, any dtype whose values need them). Bad values in a borrowed buffer fail
-// with the status and text occseg_map_from_buffer_flags gives for the same buffer. A conversion
-// runs on at most `threads` threads (0: automatic), the caller's own limit where it has one.
+// Calls fn(grid) with the map's values as a Grid for segment(): the map's own grid, or for a map
+// that views a caller's buffer, a grid that borrows the buffer (dense float32 that needs no
+// import flag: no copy; the pipeline checks the values as it reads them) or one that reads it
+// through a converter (Grid::source: other dtypes and strides, and float32 whose values need a
+// flag; the stages convert the runs they read into scratch of their own, with the values and
+// checks of occseg_map_from_buffer_flags). Bad values in a borrowed buffer fail with the status
+// and text occseg_map_from_buffer_flags gives for the same buffer. (`threads`: unused now that
+// nothing is converted whole here.)
 void with_values(const occseg_map* map, const std::function<void(const Grid&)>& fn, int threads = 0);
 // The map's values in a grid of its own: a copy of the map's grid, or of a viewed buffer
 // converted and checked as occseg_map_from_buffer_flags does (throws as it would).

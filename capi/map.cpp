@@ -5,6 +5,8 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <type_traits>
+#include <vector>
 
 #include "internal.hpp"
 #include "occseg/geometry.hpp"
@@ -74,6 +76,17 @@ T load(const char* p) {
   return v;
 }
 
+// An item stored in the opposite byte order when `swapped` (OCCSEG_IMPORT_BYTE_SWAPPED).
+template <class T>
+T load(const char* p, bool swapped) {
+  if (!swapped) return load<T>(p);
+  char b[sizeof(T)];
+  for (std::size_t k = 0; k < sizeof(T); ++k) b[k] = p[sizeof(T) - 1 - k];
+  return load<T>(b);
+}
+
+constexpr uint32_t kSwapped = OCCSEG_IMPORT_BYTE_SWAPPED;
+
 [[noreturn]] void bad_value(std::size_t x, std::size_t y, std::size_t z, double v) {
   const char* what = std::isnan(v) ? "is NaN" : (std::isinf(v) ? "is infinite" : "is outside [0, 1]");
   // The one flag that accepts this value (the Python bindings put their keyword in its place).
@@ -136,12 +149,13 @@ void convert(float* out, const Dims& d, const char* base, int dtype, const ptrdi
     }
     if (t <= 1 || bad.load()) convert_rows(out, d, base, s, 0, rows, value);
   };
+  const bool sw = flags & kSwapped;
   switch (dtype) {
     case OCCSEG_F32:
-      run([flags](const char* e, std::size_t x, std::size_t y, std::size_t z) { return probability(load<float>(e), flags, x, y, z); });
+      run([flags, sw](const char* e, std::size_t x, std::size_t y, std::size_t z) { return probability(load<float>(e, sw), flags, x, y, z); });
       break;
     case OCCSEG_F64:
-      run([flags](const char* e, std::size_t x, std::size_t y, std::size_t z) { return probability(load<double>(e), flags, x, y, z); });
+      run([flags, sw](const char* e, std::size_t x, std::size_t y, std::size_t z) { return probability(load<double>(e, sw), flags, x, y, z); });
       break;
     // Same conversion as the .npy reader, so both paths give identical maps.
     case OCCSEG_U8:
@@ -151,10 +165,173 @@ void convert(float* out, const Dims& d, const char* base, int dtype, const ptrdi
       run([](const char* e, std::size_t x, std::size_t y, std::size_t z) { return occupancy(load<int8_t>(e), x, y, z); });
       break;
     default:
-      run([](const char* e, std::size_t, std::size_t, std::size_t) { return static_cast<float>(load<uint16_t>(e) / 65535.0); });
+      run([sw](const char* e, std::size_t, std::size_t, std::size_t) { return static_cast<float>(load<uint16_t>(e, sw) / 65535.0); });
       break;
   }
 }
+
+// Voxels [i, i + n) (rows crossed) of the buffer as probabilities into out[0, n), by `value` as
+// convert_rows() converts them (so it throws as convert() does for the first bad one of the run).
+template <class Value>
+void convert_run(float* out, const Dims& d, const char* base, const ptrdiff_t s[3], std::size_t i, std::size_t n,
+                 Value value) {
+  while (n > 0) {
+    const std::size_t r = i / d.nx, x0 = i % d.nx, m = std::min(n, d.nx - x0);
+    const std::size_t z = r / d.ny, y = r % d.ny;
+    const char* row = base + static_cast<ptrdiff_t>(z) * s[2] + static_cast<ptrdiff_t>(y) * s[1];
+    for (std::size_t x = x0; x < x0 + m; ++x) *out++ = value(row + static_cast<ptrdiff_t>(x) * s[0], x, y, z);
+    i += m;
+    n -= m;
+  }
+}
+
+// A viewed buffer read through the stages' MapSource: runs of voxels converted as convert() would
+// convert them (the same floats, the same first bad voxel and text), into the stages' scratch.
+// Runs along a dense x of the common dtypes take loops of their own; the rest, and every run with
+// an import flag, go through convert()'s own per-voxel conversion.
+class BufferSource final : public occseg::MapSource {
+ public:
+  BufferSource(const Dims& d, const occseg_map::View& v) : d_(d), v_(v) {}
+
+  bool read(std::size_t i, std::size_t n, float* out) const override {
+    const ptrdiff_t* s = v_.strides;
+    const std::size_t item = dtype_size();
+    if (s[0] == static_cast<ptrdiff_t>(item) || d_.nx == 1) {
+      bool ok = true;
+      while (n > 0 && ok) {
+        const std::size_t r = i / d_.nx, x0 = i % d_.nx, m = std::min(n, d_.nx - x0);
+        const char* e = v_.data + static_cast<ptrdiff_t>(r / d_.ny) * s[2] + static_cast<ptrdiff_t>(r % d_.ny) * s[1] +
+                        static_cast<ptrdiff_t>(x0 * item);
+        if (!dense_run(e, m, out, ok)) break;  // no loop of its own: the general one below
+        i += m, n -= m, out += m;
+      }
+      if (n == 0 || !ok) return ok;
+    }
+    try {
+      convert_run_any(out, i, n);
+      return true;
+    } catch (const Error&) {
+      return false;
+    }
+  }
+
+  [[noreturn]] void fail() const override {
+    check();
+    throw Error(Status::internal, "a borrowed map's value was refused, then converted");  // (never reached)
+  }
+
+  // Throws what convert() throws for the buffer (the first bad voxel in x-fastest order), if it does.
+  void check() const {
+    std::vector<float> row(d_.nx);
+    for (std::size_t r = 0; r < d_.ny * d_.nz; ++r) convert_run_any(row.data(), r * d_.nx, d_.nx);
+  }
+
+ private:
+  std::size_t dtype_size() const { return item_size(v_.dtype); }
+
+  // A run of m voxels of one row, contiguous at e, by a loop of its own for the dtype: false when
+  // it has none (an import flag, or the occupancy dtype); else ok = no value refused.
+  bool dense_run(const char* e, std::size_t m, float* out, bool& ok) const {
+    const bool sw = v_.flags & kSwapped;
+    switch (v_.dtype) {
+      case OCCSEG_F32:
+        if (v_.flags & ~kSwapped) return false;
+        ok = sw ? float_run<float, true>(e, m, out) : float_run<float, false>(e, m, out);
+        return true;
+      case OCCSEG_F64:
+        if (v_.flags & ~kSwapped) return false;
+        ok = sw ? float_run<double, true>(e, m, out) : float_run<double, false>(e, m, out);
+        return true;
+      case OCCSEG_U8:  // (convert()'s expression: the compiler vectorises it)
+        for (std::size_t x = 0; x < m; ++x) out[x] = static_cast<float>(static_cast<unsigned char>(e[x]) / 255.0);
+        return true;
+      case OCCSEG_U16:
+        if (sw) {
+          for (std::size_t x = 0; x < m; ++x) out[x] = static_cast<float>(load<uint16_t>(e + 2 * x, true) / 65535.0);
+        } else {
+          for (std::size_t x = 0; x < m; ++x) out[x] = static_cast<float>(load<uint16_t>(e + 2 * x) / 65535.0);
+        }
+        return true;
+      default:
+        return false;
+    }
+  }
+
+  // m contiguous F32/F64 items as probabilities without an import flag: float(v), and true when
+  // every v lies in [0, 1] (what probability() accepts without a flag).
+  template <class T, bool Swapped>
+  static bool float_run(const char* e, std::size_t m, float* out) {
+    if (!Swapped) return std::is_same<T, float>::value ? f32_run(e, m, out) : f64_run(e, m, out);
+    bool good = true;
+    for (std::size_t x = 0; x < m; ++x) {
+      const T v = load<T>(e + sizeof(T) * x, true);
+      good = good && v >= T(0) && v <= T(1);
+      out[x] = static_cast<float>(v);
+    }
+    return good;
+  }
+
+  // The native-order loops, written as masks so that the compiler vectorises them (the double
+  // test needs 64-bit integer compares: AVX2 where the processor has it).
+  static bool f32_run(const char* e, std::size_t m, float* out) {
+    int32_t bad = 0;
+    for (std::size_t x = 0; x < m; ++x) {
+      const float v = load<float>(e + 4 * x);
+      bad |= (v >= 0.0f ? 0 : -1) | (v <= 1.0f ? 0 : -1);
+      out[x] = v;
+    }
+    return bad == 0;
+  }
+#if defined(__x86_64__) && defined(__GNUC__)
+  __attribute__((target_clones("avx2", "default")))
+#endif
+  static bool f64_run(const char* e, std::size_t m, float* out) {
+    for (std::size_t x = 0; x < m; ++x) out[x] = static_cast<float>(load<double>(e + 8 * x));
+    int64_t bad = 0;
+    for (std::size_t x = 0; x < m; ++x) {
+      const double v = load<double>(e + 8 * x);
+      bad |= (v >= 0.0 ? 0 : -1) | (v <= 1.0 ? 0 : -1);
+    }
+    return bad == 0;
+  }
+
+  // convert()'s per-voxel conversion of voxels [i, i + n): throws at the first bad one.
+  void convert_run_any(float* out, std::size_t i, std::size_t n) const {
+    const ptrdiff_t* s = v_.strides;
+    const uint32_t flags = v_.flags;
+    const bool sw = flags & kSwapped;
+    switch (v_.dtype) {
+      case OCCSEG_F32:
+        convert_run(out, d_, v_.data, s, i, n, [flags, sw](const char* e, std::size_t x, std::size_t y, std::size_t z) {
+          return probability(load<float>(e, sw), flags, x, y, z);
+        });
+        break;
+      case OCCSEG_F64:
+        convert_run(out, d_, v_.data, s, i, n, [flags, sw](const char* e, std::size_t x, std::size_t y, std::size_t z) {
+          return probability(load<double>(e, sw), flags, x, y, z);
+        });
+        break;
+      case OCCSEG_U8:
+        convert_run(out, d_, v_.data, s, i, n, [](const char* e, std::size_t, std::size_t, std::size_t) {
+          return static_cast<float>(load<uint8_t>(e) / 255.0);
+        });
+        break;
+      case OCCSEG_I8_OCCUPANCY:
+        convert_run(out, d_, v_.data, s, i, n, [](const char* e, std::size_t x, std::size_t y, std::size_t z) {
+          return occupancy(load<int8_t>(e), x, y, z);
+        });
+        break;
+      default:
+        convert_run(out, d_, v_.data, s, i, n, [sw](const char* e, std::size_t, std::size_t, std::size_t) {
+          return static_cast<float>(load<uint16_t>(e, sw) / 65535.0);
+        });
+        break;
+    }
+  }
+
+  Dims d_;
+  occseg_map::View v_;
+};
 
 // The checks of occseg_map_from_buffer_flags and occseg_map_view_buffer, in their order: a map
 // with dims and voxel size set and `view` describing the buffer (strides filled in).
@@ -166,7 +343,7 @@ std::unique_ptr<occseg_map> checked_map(occseg_map** out, const void* data, cons
   require(dims, "dims");
   const int dt = occseg::capi::enum_value(dtype);
   const std::size_t item = item_size(dt);
-  if (flags & ~uint32_t(OCCSEG_IMPORT_CLAMP | OCCSEG_IMPORT_NAN_UNKNOWN))
+  if (flags & ~uint32_t(OCCSEG_IMPORT_CLAMP | OCCSEG_IMPORT_NAN_UNKNOWN | OCCSEG_IMPORT_BYTE_SWAPPED))
     invalid("flags " + std::to_string(flags) + " has bits that are no occseg_import_flags");
   const Dims d{dims[0], dims[1], dims[2]};
   occseg::check_dims(d);
@@ -190,12 +367,12 @@ std::unique_ptr<occseg_map> checked_map(occseg_map** out, const void* data, cons
   return m;
 }
 
-// True when the viewed buffer is laid out as a Grid's values: float32, x fastest, dense (the
+// True when the viewed buffer is laid out as a Grid's values: native float32, x fastest, dense (the
 // stride of a one-voxel axis is never used, so any value there is dense).
 bool dense_f32(const occseg_map& m) {
   const Dims& d = m.grid.dims;
   const ptrdiff_t* s = m.view.strides;
-  return m.view.dtype == OCCSEG_F32 && (d.nx == 1 || s[0] == 4) &&
+  return m.view.dtype == OCCSEG_F32 && !(m.view.flags & kSwapped) && (d.nx == 1 || s[0] == 4) &&
          (d.ny == 1 || s[1] == static_cast<ptrdiff_t>(4 * d.nx)) &&
          (d.nz == 1 || s[2] == static_cast<ptrdiff_t>(4 * d.nx * d.ny));
 }
@@ -210,22 +387,29 @@ void dims_out(const Dims& d, size_t dims[3]) {
 
 namespace occseg::capi {
 
-void with_values(const occseg_map* map, const std::function<void(const Grid&)>& fn, int threads) {
+void with_values(const occseg_map* map, const std::function<void(const Grid&)>& fn, int) {
   if (!map->is_view) return fn(map->grid);
   const occseg_map::View& v = map->view;
   const Grid& g = map->grid;
-  // A float32 buffer that needs no import flag is read where it lies; the flags can only be
-  // honoured on a copy, made when the buffer holds a value that needs them.
+  const BufferSource source(g.dims, v);
+  // A float32 buffer that needs no import flag is read where it lies.
   if (g.borrowed && (v.flags == 0 || occseg::probabilities_in_range(g.borrowed, g.dims.count()))) {
     try {
       return fn(g);
     } catch (const Error& e) {
       if (e.status() != Status::bad_value) throw;
-      // The pipeline found a value outside [0, 1] (it names it its own way): the conversion
-      // below names the first one as occseg_map_from_buffer does, and throws.
+      // The pipeline found a value outside [0, 1] (it names it its own way): name the first one
+      // as occseg_map_from_buffer does.
+      source.check();
+      throw;
     }
   }
-  fn(converted(map, threads));
+  // Any other buffer through a converter: the stages convert the runs they read (MapSource), so
+  // no float copy of the map is made; the first bad value fails as in the copy path.
+  Grid through = g;
+  through.borrowed = nullptr;
+  through.source = &source;
+  fn(through);
 }
 
 Grid converted(const occseg_map* map, int threads) {

@@ -14,22 +14,20 @@ from ._text import option_array
 # convention exists, and it is the one type such a grid comes in.
 _DTYPES = {np.dtype(np.float32): 0, np.dtype(np.float64): 1, np.dtype(np.uint8): 2, np.dtype(np.uint16): 3,
            np.dtype(np.int8): 4}
-_IMPORT_CLAMP, _IMPORT_NAN_UNKNOWN = 1, 2
+_IMPORT_CLAMP, _IMPORT_NAN_UNKNOWN, _IMPORT_BYTE_SWAPPED = 1, 2, 4
 _EMPTY = ctypes.c_char(0)  # a valid address for zero-size arrays, so the C ABI reports their dims
 
 
 def as_voxel_array(probabilities, who):
-    """`probabilities` as an ndarray [z, y, x] or [y, x] of an accepted dtype: the caller's own
-    array whenever possible (any strides); a copy only for foreign byte order (converted to
-    native order, same dtype) or for what is not an array yet (np.asarray of a list, ...). Other
-    dtypes are refused, never guessed at."""
+    """`probabilities` as an ndarray [z, y, x] or [y, x] of an accepted dtype, in either byte
+    order: the caller's own array whenever possible (any strides, foreign byte order too: the C
+    ABI reads it byte-swapped, OCCSEG_IMPORT_BYTE_SWAPPED); a copy only for what is not an array
+    yet (np.asarray of a list, ...). Other dtypes are refused, never guessed at."""
     try:
         arr = np.asarray(probabilities)
     except (ValueError, TypeError) as e:  # a ragged list, say: NumPy's own error, as an occseg one
         raise OccsegValueError(Status.EINVAL, f"{who}: probabilities: not an array ({e})") from None
-    if arr.dtype.byteorder not in ("=", "|") and arr.dtype.newbyteorder("=") in _DTYPES:
-        arr = arr.astype(arr.dtype.newbyteorder("="))  # big-endian data: the C ABI reads native
-    if arr.dtype not in _DTYPES:
+    if arr.dtype.newbyteorder("=") not in _DTYPES:
         raise OccsegError(Status.EINVAL, f"{who}: probabilities: dtype {arr.dtype} is not supported "
                                          "(use float32, float64, uint8 or uint16; int8 for a ROS OccupancyGrid)")
     if arr.ndim not in (2, 3):
@@ -50,16 +48,38 @@ def _import_args(who, c_function, probabilities, voxel_size, origin, clamp, nan_
 
 
 def buffer_args(arr):
-    """(data address, occseg_dtype, dims, byte strides) describing ndarray `arr` [z, y, x] or [y, x]
-    to occseg_map_from_buffer: x is the last axis, and NumPy's byte strides (negative ones too)
-    are passed as they are."""
+    """(data address, occseg_dtype, dims, byte strides, byte-order flag) describing ndarray `arr`
+    [z, y, x] or [y, x] to occseg_map_from_buffer_flags: x is the last axis, NumPy's byte strides
+    (negative ones too) are passed as they are, and the flag is OCCSEG_IMPORT_BYTE_SWAPPED for
+    items in the foreign byte order (else 0)."""
     shape, strides = arr.shape, arr.strides
     if arr.ndim == 2:
         shape, strides = (1,) + shape, (0,) + strides  # one z layer: its stride is never used
     dims = c_size3(shape[2], shape[1], shape[0])
     st = c_ptrdiff3(strides[2], strides[1], strides[0])
     data = arr.ctypes.data if arr.size else ctypes.addressof(_EMPTY)
-    return data, _DTYPES[arr.dtype], dims, st
+    swapped = _IMPORT_BYTE_SWAPPED if arr.dtype.byteorder not in ("=", "|") else 0
+    return data, _DTYPES[arr.dtype.newbyteorder("=")], dims, st, swapped
+
+
+def _make(fn, arr, vs, flags):
+    """fn(out, data, dtype, dims, strides, vs, flags) for `arr`; the new handle and the array it
+    reads. A liboccseg older than OCCSEG_IMPORT_BYTE_SWAPPED refuses the flag (EINVAL naming
+    occseg_import_flags): a foreign-order array is then converted to native order first."""
+    data, dtype, dims, strides, swapped = buffer_args(arr)
+    out = ctypes.c_void_p()
+    rc = fn(ctypes.byref(out), data, dtype, dims, strides, vs, flags | swapped)
+    if rc != 0 and swapped:
+        try:
+            check(rc)
+        except OccsegError as e:
+            if e.status != Status.EINVAL or "occseg_import_flags" not in e.message:
+                raise
+        arr = arr.astype(arr.dtype.newbyteorder("="))
+        data, dtype, dims, strides, _ = buffer_args(arr)
+        rc = fn(ctypes.byref(out), data, dtype, dims, strides, vs, flags)
+    check(rc)
+    return out, arr
 
 
 class Map(Owned):
@@ -93,10 +113,8 @@ class Map(Owned):
         origin=(position.x, position.y, 0)."""
         arr, vs, o, flags = _import_args("occseg.Map.from_array", "occseg_map_from_buffer", probabilities,
                                          voxel_size, origin, clamp, nan_unknown)
-        data, dtype, dims, strides = buffer_args(arr)
-        out = ctypes.c_void_p()
         try:
-            check(lib.occseg_map_from_buffer_flags(ctypes.byref(out), data, dtype, dims, strides, vs, flags))
+            out, _ = _make(lib.occseg_map_from_buffer_flags, arr, vs, flags)
         except OccsegError as e:
             raise python_flag_error(e) from None
         return _configured(cls(out), None, o)
@@ -109,15 +127,14 @@ class Map(Owned):
         (segment(), to_array(), write()), which raises what from_array() would raise for the same
         array. The array must not change while a call reads the map (a data race); a change
         between calls is seen by the next one. A dense float32 array (C order, [z, y, x]) is read
-        by the pipeline directly; other dtypes and layouts are converted by each call, into a
-        float32 copy the call frees. Needs a liboccseg with occseg_map_view_buffer."""
+        by the pipeline directly; segment() reads other dtypes, layouts and byte orders through a
+        converter, a few rows or planes at a time, so no copy of the map is made either (to_array()
+        and write() convert it whole). Needs a liboccseg with occseg_map_view_buffer."""
         if not has("occseg_map_view_buffer"):
             raise OccsegError(Status.EUNSUPPORTED, "occseg.Map.view: the loaded liboccseg has no occseg_map_view_buffer")
         arr, vs, o, flags = _import_args("occseg.Map.view", "occseg_map_view_buffer", probabilities, voxel_size,
                                          origin, clamp, nan_unknown)
-        data, dtype, dims, strides = buffer_args(arr)
-        out = ctypes.c_void_p()
-        check(lib.occseg_map_view_buffer(ctypes.byref(out), data, dtype, dims, strides, vs, flags))
+        out, arr = _make(lib.occseg_map_view_buffer, arr, vs, flags)
         m = cls.__new__(cls)
         m._own(out, "map", lib.occseg_map_free, keep=arr)
         return _configured(m, None, o)

@@ -49,9 +49,10 @@ def segment(probabilities, preset="default", threads=0, *, voxel_size=None, orig
 
     probabilities: NumPy array indexed [z, y, x] (or [y, x]) of float32, float64, uint8 or uint16
         (0..max meaning 0..1), or int8 read as a ROS OccupancyGrid (-1 unknown, 0..100 percent;
-        see Map.from_array), any strides: it is read in place, not copied (Map.view; a dense
-        float32 array with no copy at all, other dtypes and layouts converted by the call into a
-        temporary float32 array it frees). Or an occseg.Map.
+        see Map.from_array), any strides and either byte order: it is read in place, not copied
+        (Map.view; a dense native float32 array as it lies, other dtypes, layouts and byte
+        orders through a converter, a few rows or planes at a time: no copy of the map either
+        way). Or an occseg.Map.
     preset: "default" (paper plus per-voxel safety rules) or "paper" (as published).
     threads: worker threads, 0 = all cores; results never depend on it.
     voxel_size, origin: of an array input (default 1 and (0, 0, 0)); a Map carries its own.

@@ -145,6 +145,62 @@ static void view_matches_copy_every_dtype_and_layout(void **state) {
   occseg_params_free(params);
 }
 
+/* OCCSEG_IMPORT_BYTE_SWAPPED: a buffer in the opposite byte order reads as the native one, in
+ * the copy path and through a view (every multi-byte dtype, every layout); and the bytes of a
+ * big-endian double 0.25 (3F D0 00 .. 00), written out by hand, read as 0.25. */
+static void byte_swapped_buffers_read_as_native_ones(void **state) {
+  const occseg_dtype dtypes[] = {OCCSEG_F32, OCCSEG_F64, OCCSEG_U16};
+  const unsigned char quarter_be[8] = {0x3F, 0xD0, 0, 0, 0, 0, 0, 0};
+  const size_t one[3] = {1, 1, 1};
+  occseg_params *params = two_threads();
+  occseg_map *m = NULL;
+  float v = 0;
+  size_t d, i, k;
+  int kind;
+  (void)state;
+  for (d = 0; d < sizeof dtypes / sizeof dtypes[0]; ++d)
+    for (kind = 0; kind < LAYOUTS; ++kind) {
+      layout l = make(dtypes[d], kind), sw = make(dtypes[d], kind);
+      const size_t it = item_size(dtypes[d]);
+      const size_t bytes = (size_t)(kind == SLICED ? 3 * 2 * it * BN : it * BN);
+      occseg_map *native = NULL, *copy = NULL, *view = NULL;
+      occseg_result *a = NULL, *b = NULL, *c = NULL;
+      static float va[BN], vb[BN], vc[BN];
+      char what[64];
+      for (i = 0; i < bytes; i += it)  /* every item (at multiples of its size in each layout) */
+        for (k = 0; k < it; ++k) sw.alloc[i + k] = l.alloc[i + it - 1 - k];
+      snprintf(what, sizeof what, "swapped dtype %d, %s", (int)dtypes[d], kLayoutName[kind]);
+      assert_int_equal(occseg_map_from_buffer_flags(&native, l.data, dtypes[d], kDims, l.strides, 0.05, 0), OCCSEG_OK);
+      assert_int_equal(occseg_map_from_buffer_flags(&copy, sw.data, dtypes[d], kDims, sw.strides, 0.05,
+                                                    OCCSEG_IMPORT_BYTE_SWAPPED), OCCSEG_OK);
+      assert_int_equal(occseg_map_view_buffer(&view, sw.data, dtypes[d], kDims, sw.strides, 0.05,
+                                              OCCSEG_IMPORT_BYTE_SWAPPED), OCCSEG_OK);
+      assert_int_equal(occseg_map_values(native, va, BN), OCCSEG_OK);
+      assert_int_equal(occseg_map_values(copy, vb, BN), OCCSEG_OK);
+      assert_int_equal(occseg_map_values(view, vc, BN), OCCSEG_OK);
+      assert_memory_equal(va, vb, sizeof va);
+      assert_memory_equal(va, vc, sizeof va);
+      assert_int_equal(occseg_segment(&a, native, params), OCCSEG_OK);
+      assert_int_equal(occseg_segment(&b, copy, params), OCCSEG_OK);
+      assert_int_equal(occseg_segment(&c, view, params), OCCSEG_OK);
+      assert_same_results(a, b, what);
+      assert_same_results(a, c, what);
+      occseg_result_free(a);
+      occseg_result_free(b);
+      occseg_result_free(c);
+      occseg_map_free(native);
+      occseg_map_free(copy);
+      occseg_map_free(view);
+      free(l.alloc);
+      free(sw.alloc);
+    }
+  occseg_params_free(params);
+  assert_int_equal(occseg_map_view_buffer(&m, quarter_be, OCCSEG_F64, one, NULL, 1.0, OCCSEG_IMPORT_BYTE_SWAPPED), OCCSEG_OK);
+  assert_int_equal(occseg_map_values(m, &v, 1), OCCSEG_OK);
+  assert_true(v == 0.25f);
+  occseg_map_free(m);
+}
+
 /* The view holds no copy: a change of the buffer between calls is what the next call reads. */
 static void view_reads_the_buffer_at_each_call(void **state) {
   layout l = make(OCCSEG_F32, DENSE);
@@ -388,6 +444,7 @@ int run_borrow_tests(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(view_matches_copy_every_dtype_and_layout),
     cmocka_unit_test(view_reads_the_buffer_at_each_call),
+    cmocka_unit_test(byte_swapped_buffers_read_as_native_ones),
     cmocka_unit_test(bad_values_fail_as_in_the_copy_path),
     cmocka_unit_test(flags_apply_as_in_the_copy_path),
     cmocka_unit_test(view_arguments_fail_as_in_the_copy_path),

@@ -97,7 +97,7 @@ static void argument_errors(void **state) {
   EXPECT_FAIL(occseg_map_from_buffer(&m, p, OCCSEG_F32, big, NULL, 1.0), OCCSEG_EDIMS, "2097152 x 2097152 x 1");
   EXPECT_FAIL(occseg_map_from_buffer(&m, p, OCCSEG_F32, k444, NULL, 0.0), OCCSEG_EVALUE, "voxel_size 0");
   EXPECT_FAIL(occseg_map_from_buffer(&m, p, OCCSEG_F32, k444, NULL, NAN), OCCSEG_EVALUE, "voxel_size nan");
-  EXPECT_FAIL(occseg_map_from_buffer_flags(&m, p, OCCSEG_F32, k444, NULL, 1.0, 4), OCCSEG_EINVAL, "flags 4");
+  EXPECT_FAIL(occseg_map_from_buffer_flags(&m, p, OCCSEG_F32, k444, NULL, 1.0, 8), OCCSEG_EINVAL, "flags 8");
   assert_null(m);
 }
 

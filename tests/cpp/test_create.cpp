@@ -222,7 +222,7 @@ TEST(Create, FusedMapPassAddsTheRowsAsCreationDoes) {
     std::vector<std::uint8_t> want_own(g.p.size(), 0xEE);
     detail::CellRows want(g, want_own.data(), lo, hi, nullptr, nullptr, kernels::table(kernels::Isa::scalar).create);
     for (std::size_t z = 0; z < g.dims.nz; ++z)
-      for (std::size_t y = 0; y < g.dims.ny; ++y) want.add_row(y, z);
+      for (std::size_t y = 0; y < g.dims.ny; ++y) want.add_row(y, z, g.values() + g.index(0, y, z));
     ASSERT_EQ(want_own, own_states(g, Params())) << "map " << k;
     const detail::OwnBitsStore want_bits = detail::pack_own_bits(want_own.data(), g.dims, 1);
     const TextureMap want_codes = compute_texture(g, 8, 1);

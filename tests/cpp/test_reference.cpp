@@ -66,7 +66,7 @@ detail::OwnBitsStore own_bits(const Grid& g) {
     detail::float_bounds(Params().free_below, Params().occupied_above, lo, hi);
     detail::CellRows rows(g, nullptr, lo, hi, u.data(), o.data());
     for (std::size_t z = 0; z < d.nz; ++z)
-      for (std::size_t y = 0; y < d.ny; ++y) rows.add_row(y, z);
+      for (std::size_t y = 0; y < d.ny; ++y) rows.add_row(y, z, g.values() + g.index(0, y, z));
     EXPECT_EQ(u, want.unknown);
     EXPECT_EQ(o, want.occupied);
   });

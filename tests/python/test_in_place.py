@@ -208,10 +208,28 @@ def test_recycle_takes_the_labels_only_when_nobody_holds_them():
         assert np.array_equal(again.labels, plain.labels)
 
 
+@pytest.mark.parametrize("dtype", [">f4", ">f8", ">u2"])
+def test_a_foreign_byte_order_is_read_in_place(dtype):
+    """A big-endian array is viewed as it is (the C ABI swaps each item as it reads it), in every
+    layout, with the labels of the native array."""
+    native = as_dtype(noisy_scene(seed=21), np.dtype(dtype).newbyteorder("="))
+    ref = copied(native)
+    for name, arr in layouts(native.astype(dtype)).items():
+        with occseg.Map.view(arr) as m:
+            assert m._h.keep is arr, name  # the very array: no native copy was made
+            assert np.array_equal(m.to_array(), native.astype(np.float32) if native.dtype.kind == "f"
+                                  else (native / 65535.0).astype(np.float32)), name
+        r = occseg.segment(arr)
+        assert np.array_equal(r.labels, ref.labels), name
+        assert r.segments == ref.segments, name
+
+
 def test_a_foreign_byte_order_is_converted_and_other_dtypes_refused():
     m = noisy_scene(seed=21)
     swapped = m.astype(">f8")
     assert np.array_equal(occseg.segment(swapped).labels, occseg.segment(m).labels)
+    with occseg.Map.from_array(swapped) as copy:
+        assert np.array_equal(copy.to_array(), m.astype(np.float32))
     with pytest.raises(occseg.OccsegError) as e:
         occseg.segment(m.astype(np.float16))
     assert e.value.status == occseg.Status.EINVAL and "float16" in e.value.message

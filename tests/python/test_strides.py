@@ -35,7 +35,8 @@ def views():
 @pytest.mark.parametrize("name,view", list(views()), ids=[n for n, _ in views()])
 def test_view_equals_contiguous_copy(name, view):
     assert _map.as_voxel_array(view, "t") is view  # no copy on the Python side
-    data, _, dims, strides = _map.buffer_args(view)
+    data, _, dims, strides, swapped = _map.buffer_args(view)
+    assert swapped == 0
     assert data == view.__array_interface__["data"][0]  # the C ABI reads the caller's memory
     assert tuple(dims) == tuple(reversed(view.shape)) + (() if view.ndim == 3 else (1,))
     copy = np.ascontiguousarray(view)

@@ -197,7 +197,10 @@ typedef enum {
 typedef enum {
   OCCSEG_IMPORT_STRICT = 0,      /* F32/F64 values outside [0, 1], infinities and NaN fail */
   OCCSEG_IMPORT_CLAMP = 1,       /* values below 0 (and -inf) become 0, above 1 (and +inf) 1 */
-  OCCSEG_IMPORT_NAN_UNKNOWN = 2  /* NaN becomes 0.5, i.e. unknown */
+  OCCSEG_IMPORT_NAN_UNKNOWN = 2, /* NaN becomes 0.5, i.e. unknown */
+  OCCSEG_IMPORT_BYTE_SWAPPED = 4 /* the items (F32, F64, U16) are stored in the byte order opposite
+                                    to the machine's (big-endian data on x86): each is byte-swapped
+                                    as it is read, then converted as a native one would be */
 } occseg_import_flags;
 
 /* Copies a caller's 3D array into a new map. Voxel (x, y, z) is read at
@@ -655,11 +658,15 @@ OCCSEG_API int occseg_result_write_outputs(const occseg_result *result, const ch
  * reads the map is a data race, and freeing it first leaves the map dangling (any later use reads
  * freed memory). Results do not refer to the map or the buffer: they may outlive both.
  *
- * Cost: a dense float32 buffer with x fastest (a C-order NumPy float32 array [z, y, x]) is read
- * by the pipeline itself, in its first pass, with no copy at all. Any other dtype or layout is
- * converted for each call that reads it into a temporary float array that the call frees (4 bytes
- * per voxel during the call, nothing between calls); so is a float32 buffer under import flags
- * when it holds a value the flags must change (it is first scanned for one). */
+ * Cost: a dense float32 buffer with x fastest (a C-order NumPy float32 array [z, y, x]) in the
+ * machine's byte order is read by the pipeline itself, in its first pass, with no copy at all.
+ * occseg_segment and occseg_context_segment read any other dtype, layout or byte order, and a
+ * float32 buffer under import flags that holds a value the flags must change (it is first
+ * scanned for one), through a converter: the stages convert the rows and planes they read into
+ * scratch of their own (three planes per thread at most), with the values and the checks of the
+ * copy path, so no float copy of the map is made either. occseg_map_values converts into the
+ * caller's array; occseg_map_write and a plugin's texture operator (which take a float array)
+ * get a temporary float copy (4 bytes per voxel during the call, nothing between calls). */
 OCCSEG_API int occseg_map_view_buffer(occseg_map **out, const void *data, occseg_dtype dtype,
                                       const size_t dims[3] /* nx, ny, nz */,
                                       const ptrdiff_t strides[3] /* bytes; NULL: dense, x fastest */,

@@ -2,6 +2,7 @@
 #include "occseg/grid.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <string>
 
@@ -51,6 +52,28 @@ void resize_for_fill(std::vector<float>& v, std::size_t n, int threads) {
 
 bool probabilities_in_range(const float* p, std::size_t n) { return kernels::active().texture.values_in_range(p, n); }
 
+float Grid::source_value(std::size_t i) const {
+  float v;
+  if (!source->read(i, 1, &v)) source->fail();
+  return v;
+}
+
+Grid with_float_values(const Grid& g, int threads) {
+  if (!g.source) return g;
+  Grid copy;
+  copy.dims = g.dims;
+  copy.voxel_size = g.voxel_size;
+  copy.origin = g.origin;
+  resize_for_fill(copy.p, g.dims.count(), 0);
+  const std::size_t rows = g.dims.ny * g.dims.nz, nx = g.dims.nx;
+  std::atomic<bool> bad{false};
+  parallel_for(rows, threads, [&](std::size_t r0, std::size_t r1) {
+    if (!g.source->read(r0 * nx, (r1 - r0) * nx, copy.p.data() + r0 * nx)) bad.store(true);
+  });
+  if (bad.load()) g.source->fail();
+  return copy;
+}
+
 void check_probabilities(const Grid& g) {
   check_dims(g.dims);
   if (g.value_count() != g.dims.count())
@@ -60,6 +83,12 @@ void check_probabilities(const Grid& g) {
   if (!(g.voxel_size > 0) || !std::isfinite(g.voxel_size))
     throw Error(Status::bad_value, "voxel size " + std::to_string(g.voxel_size) +
                                        " is not a positive finite number");
+  if (g.source) {  // row by row, in order: the first row the source refuses holds the first bad voxel
+    std::vector<float> row(g.dims.nx);
+    for (std::size_t r = 0; r < g.dims.ny * g.dims.nz; ++r)
+      if (!g.source->read(r * g.dims.nx, g.dims.nx, row.data())) g.source->fail();
+    return;
+  }
   const float* const p = g.values();
   // The vectorised check first; the loop below only looks for the first bad voxel to name it.
   if (probabilities_in_range(p, g.value_count())) return;

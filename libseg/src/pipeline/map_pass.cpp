@@ -12,7 +12,9 @@ static_assert(kMapPassPlanes % kMeanCell == 0, "a cell's planes must stay on one
 int fused_map_pass(const TextureOperator& op, const Grid& grid, const Params& params, const kernels::Table& k,
                    std::uint16_t* codes, std::uint8_t* scratch, CellRows& cells) {
   MapRowSink sink;
-  sink.row = [](void* self, std::size_t y, std::size_t z) { static_cast<CellRows*>(self)->add_row(y, z); };
+  sink.row = [](void* self, std::size_t y, std::size_t z, const float* values) {
+    static_cast<CellRows*>(self)->add_row(y, z, values);
+  };
   sink.self = &cells;
   return op.native_into(grid, params, k, codes, scratch, &sink);
 }

@@ -25,9 +25,11 @@ class CellRows;  // stages/own_states.hpp
 constexpr std::size_t kMapPassPlanes = 8;
 
 // What the texture's first pass hands each row of the map (y, z) to right after it has read it
-// (faces included, every row once): row(self, y, z), on the thread that read it.
+// (faces included, every row once): row(self, y, z, values), on the thread that read it, with the
+// row's nx values as the pass read them (in the map, or converted from a grid's MapSource into
+// the pass's scratch: valid during the call only).
 struct MapRowSink {
-  void (*row)(void* self, std::size_t y, std::size_t z) = nullptr;
+  void (*row)(void* self, std::size_t y, std::size_t z, const float* values) = nullptr;
   void* self = nullptr;
 };
 

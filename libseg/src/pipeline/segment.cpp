@@ -119,16 +119,20 @@ Result segment(const Grid& grid, const Params& params, bool keep_stages) {
   return segment_into(grid, params, keep_stages, LabelArray());
 }
 
-Result segment_into(const Grid& grid, const Params& requested, bool keep_stages, LabelArray&& labels,
+Result segment_into(const Grid& input, const Params& requested, bool keep_stages, LabelArray&& labels,
                     Workspace* workspace) {
   requested.validate();
   Params params = requested;  // with texture "auto" resolved for this map
-  params.texture = resolved_texture(requested, grid.dims);
+  params.texture = resolved_texture(requested, input.dims);
   // The kernels of this call, chosen once on the calling thread and handed to every stage.
   const kernels::Table& k = kernels::active();
   // The built-in texture operator checks the values itself (compute_texture); plugins get a
   // checked map.
   const TextureOperator* op = find_texture(params.texture);
+  // A map read through a converter (Grid::source) is read so by the fused map pass and every
+  // stage after it; a plugin's texture operator takes floats, so for it the map is converted whole.
+  Grid floats;
+  const Grid& grid = input.source && !(op && op->native_into) ? (floats = with_float_values(input, params.threads)) : input;
   check_map(grid, params.threads, !(op && op->native), k);
   Result r;
   r.dims = grid.dims;

@@ -587,7 +587,7 @@ class Splitter {
     for (std::size_t m = 0; m < members_.size(); ++m) {
       Sum& t = sums[labels_[members_[m]]];
       ++t.n;
-      t.p += g_.values()[members_[m]];
+      t.p += g_.value(members_[m]);
       for (int k = 0; k < 3; ++k) {
         const std::uint32_t q = static_cast<std::uint32_t>(pts_[m][k]);
         t.c[k] += pts_[m][k];

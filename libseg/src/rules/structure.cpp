@@ -639,7 +639,7 @@ class Structure {
     for (std::size_t m = 0; m < n; ++m) {
       std::uint32_t& l = labels_[members_[m]];
       l = l > comp_top ? s : final_id[comp_top - l];
-      sums[l == s ? 0 : 1 + (l - first_temp)].add(pts_[m], g_.values()[members_[m]]);
+      sums[l == s ? 0 : 1 + (l - first_temp)].add(pts_[m], g_.value(members_[m]));
     }
     sums[0].store(segs_[s]);
     for (std::size_t k = 1; k < sums.size(); ++k) sums[k].store(segs_[first_temp + k - 1]);

@@ -19,7 +19,10 @@ struct MapRowSink;  // pipeline/map_pass.hpp
 // fresh array. Same codes, same errors. With `lbp_scratch` (grid.dims.count() bytes, any
 // storage), the first pass parks the LBP codes there and the second reads them instead of the
 // map. With `rows`, the first pass hands every row of the map to it right after the row's
-// texture (while the row is in the cache), as MapRowSink says.
+// texture (while the row is in the cache), as MapRowSink says. A grid read through a source
+// (Grid::source) is converted plane by plane into a ring of three planes per thread when
+// `lbp_scratch` is given (the second pass then reads no map values); without it, whole into a
+// float copy first.
 void compute_texture_into(const Grid& grid, int contrast_bins, int threads, code_t* codes,
                           std::uint8_t* lbp_scratch = nullptr, const MapRowSink* rows = nullptr,
                           const kernels::Table& k = kernels::active());

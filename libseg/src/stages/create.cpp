@@ -8,6 +8,7 @@
 
 #include "kernels/kernels.hpp"
 #include "occseg/parallel.hpp"
+#include "stages/map_rows.hpp"
 #include "stages/own_states.hpp"
 #include "util/bit_rows.hpp"
 #include "util/huge_pages.hpp"
@@ -19,6 +20,7 @@ using detail::word_t;
 double mean_occupancy(const Grid& grid, const Block& b) {
   // Cell by cell (kMeanCell^3 cells anchored at voxel 0), each cell's part in scan order.
   constexpr std::uint32_t k = kMeanCell;
+  detail::MapRows map(grid);
   double sum = 0;
   for (std::uint32_t cz = b.lo[2] / k * k; cz < b.hi[2]; cz += k)
     for (std::uint32_t cy = b.lo[1] / k * k; cy < b.hi[1]; cy += k)
@@ -26,8 +28,9 @@ double mean_occupancy(const Grid& grid, const Block& b) {
         double part = 0;
         for (std::uint32_t z = std::max(cz, b.lo[2]); z < std::min(cz + k, b.hi[2]); ++z)
           for (std::uint32_t y = std::max(cy, b.lo[1]); y < std::min(cy + k, b.hi[1]); ++y) {
-            const float* row = grid.values() + grid.index(0, y, z);
-            for (std::uint32_t x = std::max(cx, b.lo[0]); x < std::min(cx + k, b.hi[0]); ++x) part += row[x];
+            const std::uint32_t x0 = std::max(cx, b.lo[0]), x1 = std::min(cx + k, b.hi[0]);
+            const float* run = map.run(grid.index(x0, y, z), x1 - x0);
+            for (std::uint32_t x = x0; x < x1; ++x) part += run[x - x0];
           }
         sum += part;
       }
@@ -72,11 +75,10 @@ detail::CellRows::CellRows(const Grid& grid, std::uint8_t* own, float lo, float 
       k_(&k),
       sum_(ncx_ * ncy_ * ((grid.dims.nz + kMeanCell - 1) / kMeanCell), 0.0) {}
 
-void detail::CellRows::add_row(std::size_t y, std::size_t z) {
+void detail::CellRows::add_row(std::size_t y, std::size_t z, const float* row) {
   constexpr std::size_t c = kMeanCell;
   static_assert(kMeanCell == 8, "add_cells adds eight voxels per cell");
   const std::size_t nx = grid_->dims.nx, i0 = nx * (y + grid_->dims.ny * z);
-  const float* const row = grid_->values() + i0;
   if (own_) {
     k_->own_states(row, nx, lo_, hi_, own_ + i0);
   } else if (unknown_ && occupied_) {  // the own states as bits only, straight from the values
@@ -116,6 +118,7 @@ void create_by_blocks(const Grid& grid, const std::vector<Block>& blocks, const 
   for (std::size_t i = 0; i < blocks.size(); ++i) order[i] = {grid.index(blocks[i].lo[0], blocks[i].lo[1], blocks[i].lo[2]), i};
   std::sort(order.begin(), order.end());
   parallel_for_dynamic(blocks.size(), params.threads, [&](std::size_t b, std::size_t e) {
+    detail::MapRows map(grid);
     for (std::size_t k = b; k < e; ++k) {  // blocks are disjoint: no two threads write one voxel
       const Block& blk = blocks[order[k].second];
       const std::size_t width = blk.hi[0] - blk.lo[0];
@@ -123,7 +126,7 @@ void create_by_blocks(const Grid& grid, const std::vector<Block>& blocks, const 
         for (std::uint32_t z = blk.lo[2]; z < blk.hi[2]; ++z)
           for (std::uint32_t y = blk.lo[1]; y < blk.hi[1]; ++y) {
             const std::size_t at = grid.index(blk.lo[0], y, z);
-            kern.own_states(grid.values() + at, width, lo, hi, own + at);
+            kern.own_states(map.run(at, width), width, lo, hi, own + at);
           }
       const auto s = static_cast<std::uint8_t>(params.state_of(mean_occupancy(grid, blk)));
       for (std::uint32_t z = blk.lo[2]; z < blk.hi[2]; ++z)
@@ -173,10 +176,11 @@ bool create_by_rows(const Grid& grid, const std::vector<Block>& blocks, const Pa
   // The cells' sums, a row of cells (c planes of c rows) per task, unless they are summed already.
   if (!summed)
     parallel_for_dynamic(ncy * ncz, params.threads, [&](std::size_t t0, std::size_t t1) {
+      detail::MapRows map(grid);
       for (std::size_t t = t0; t < t1; ++t) {
         const std::size_t cy = t % ncy, cz = t / ncy;
         for (std::size_t z = cz * c; z < std::min(d.nz, cz * c + c); ++z)
-          for (std::size_t y = cy * c; y < std::min(d.ny, cy * c + c); ++y) rows.add_row(y, z);
+          for (std::size_t y = cy * c; y < std::min(d.ny, cy * c + c); ++y) rows.add_row(y, z, map.row(y, z));
       }
     });
   const std::vector<double>& cell_sum = rows.sums();

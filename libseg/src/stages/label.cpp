@@ -13,6 +13,7 @@
 #include "pipeline/segment_internal.hpp"
 #include "util/huge_pages.hpp"
 #include "util/thread_scratch.hpp"
+#include "stages/map_rows.hpp"
 
 namespace occseg {
 
@@ -306,14 +307,14 @@ class Labelling {
   // are added to the table in slab order as soon as all slabs before them are (whoever finishes
   // one merges what is ready), so only the few slabs waiting for an earlier one keep their slots.
   // 4. Means and centroids.
-  void segment_table(const float* p, std::vector<Segment>& segments, int threads);
+  void segment_table(const Grid& g, std::vector<Segment>& segments, int threads);
 
  private:
   // Slab sl's runs in a table (`expected`: about how many), united and numbered there; the
   // numbers stay in the table (dense) or go to the run starts in the label array (sparse).
   void label_slab(std::size_t sl, std::size_t expected, bool dense) __attribute__((noinline));
   void join_plane(std::size_t sl);
-  void slab_statistics(std::size_t sl, const float* p, detail::ThreadScratch<SlotStats>& out);
+  void slab_statistics(std::size_t sl, const Grid& g, detail::ThreadScratch<SlotStats>& out);
 
   // Local number of the run starting at voxel x of row r of slab sl (map index of the row: i0),
   // the k-th run of its row.
@@ -473,7 +474,7 @@ void Labelling::join_plane(std::size_t sl) {
     }
 }
 
-void Labelling::segment_table(const float* p, std::vector<Segment>& segments, int threads) {
+void Labelling::segment_table(const Grid& g, std::vector<Segment>& segments, int threads) {
   const auto count = static_cast<std::uint32_t>(state_of_.size());
   segments.assign(count, Segment());
   // Each segment's integer coordinate sums are kept in the bits of its centroid until the means
@@ -508,7 +509,7 @@ void Labelling::segment_table(const float* p, std::vector<Segment>& segments, in
   std::size_t merged = 0;
   std::mutex merge_mutex;
   for_each_slab(slabs, threads, [&](std::size_t sl) {
-    slab_statistics(sl, p, slots[sl]);
+    slab_statistics(sl, g, slots[sl]);
     run_local_[sl] = std::vector<std::uint32_t>();
     row_first_[sl] = std::vector<std::uint32_t>();
     std::lock_guard<std::mutex> lock(merge_mutex);
@@ -530,7 +531,9 @@ void Labelling::segment_table(const float* p, std::vector<Segment>& segments, in
 
 // Slab sl's final labels, and its share of every segment present in it (in `out`, by order of
 // the segments' first voxels), summed run by run in scan order.
-void Labelling::slab_statistics(std::size_t sl, const float* p, detail::ThreadScratch<SlotStats>& out) {
+void Labelling::slab_statistics(std::size_t sl, const Grid& g, detail::ThreadScratch<SlotStats>& out) {
+  const float* const p = g.values();  // null for a grid read through a source: `map` converts each row
+  detail::MapRows map(g);
   const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab);
   std::uint32_t* const lab = lab_;
   // Slot of each local component: segments present in this slab, in order of first voxel.
@@ -561,16 +564,17 @@ void Labelling::slab_statistics(std::size_t sl, const float* p, detail::ThreadSc
   for (std::size_t z = zb; z < ze; ++z)
     for (std::size_t y = 0; y < ny; ++y) {
       const std::size_t i0 = nx * (y + ny * z);
+      const float* const prow = map.run(i0, nx);
       for (std::size_t x = 0; x < nx;) {
         const std::size_t e = next_start(starts_.data(), i0 + x + 1, i0 + nx) - i0;  // a run: one component
         for (const std::size_t to = std::min(slab_end, i0 + e + kAhead); ahead < to; ahead += kLine) {
-          __builtin_prefetch(p + ahead);
+          if (p) __builtin_prefetch(p + ahead);
           __builtin_prefetch(lab + ahead, 1);
         }
         const std::uint32_t l = numbers ? *numbers++ : lab[i0 + x];  // its local number
         SlotStats& t = out[slot[l]];
         std::fill(lab + i0 + x, lab + i0 + e, ids[l]);
-        t.mop += k_.run_sum(p + i0 + x, e - x);  // runs in scan order within the slab
+        t.mop += k_.run_sum(prow + x, e - x);  // runs in scan order within the slab
         const std::uint64_t len = e - x;
         t.voxels += len;
         t.sum[0] += (static_cast<std::uint64_t>(x) + e - 1) * len / 2;
@@ -606,7 +610,7 @@ void label_states(const std::uint8_t* s, const std::function<void()>& release, c
   labelling.forget_states();
   if (release) release();
   // Then the segment table.
-  labelling.segment_table(g.values(), segments, threads);
+  labelling.segment_table(g, segments, threads);
 }
 
 }  // namespace

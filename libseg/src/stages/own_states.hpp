@@ -68,13 +68,15 @@ void pack_own_bits(const std::uint8_t* own, const Dims& dims, int threads, std::
 // voxels in x order: the order of mean_occupancy(). segment()'s fused map pass
 // (pipeline/map_pass.hpp) adds each row right after the texture's first pass read it, while it
 // is in the cache: creation then reads only these sums, not the map. The rows of one cell must be
-// added by one thread, in scan order. add_row() uses the kernels `k`, which must outlive the
+// added by one thread, in scan order. The map itself is not read here: add_row() is handed each
+// row's values. add_row() uses the kernels `k`, which must outlive the
 // object (a table's do: kernels::table()), on whichever thread adds the row.
 class CellRows {
  public:
   CellRows(const Grid& grid, std::uint8_t* own, float lo, float hi, std::uint64_t* unknown_bits = nullptr,
            std::uint64_t* occupied_bits = nullptr, const kernels::CreateKernels& k = kernels::active().create);
-  void add_row(std::size_t y, std::size_t z);
+  // Row (y, z), whose nx values are `row` (MapRows gives them for a grid read through a source).
+  void add_row(std::size_t y, std::size_t z, const float* row);
   const std::vector<double>& sums() const { return sum_; }  // cell (x, y, z) at x + ncx * (y + ncy * z)
   std::size_t cells_x() const { return ncx_; }
   std::size_t cells_y() const { return ncy_; }

@@ -22,6 +22,7 @@
 #include <utility>
 
 #include "occseg/parallel.hpp"
+#include "stages/map_rows.hpp"
 #include "stages/own_states.hpp"
 #include "util/huge_pages.hpp"
 
@@ -306,6 +307,14 @@ std::vector<std::uint8_t> own_states(const Grid& g, const Params& params) {
   resize_huge(own, g.value_count());
   float lo, hi;
   detail::float_bounds(params.free_below, params.occupied_above, lo, hi);
+  if (g.source) {  // row by row, each converted as it is read
+    const std::size_t nx = g.dims.nx;
+    parallel_for(g.dims.ny * g.dims.nz, params.threads, [&](std::size_t r0, std::size_t r1) {
+      detail::MapRows map(g);
+      for (std::size_t r = r0; r < r1; ++r) detail::own_states_of(map.run(r * nx, nx), nx, lo, hi, own.data() + r * nx);
+    });
+    return own;
+  }
   const std::size_t chunk = 1 << 16;
   parallel_for((own.size() + chunk - 1) / chunk, params.threads, [&](std::size_t c0, std::size_t c1) {
     const std::size_t b = c0 * chunk, e = std::min(own.size(), c1 * chunk);

@@ -104,12 +104,17 @@ TextureMap compute_texture(const Grid& grid, int contrast_bins, int threads, con
 void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threads, code_t* codes,
                                   std::uint8_t* lbp_scratch, const MapRowSink* rows, const kernels::Table& k) {
   check_contrast_bins(contrast_bins);
+  if (grid.source && !lbp_scratch) {  // pass 2 would read the map again: as floats of its own
+    const Grid copy = with_float_values(grid, threads);
+    return compute_texture_into(copy, contrast_bins, threads, codes, nullptr, rows, k);
+  }
   const kernels::TextureKernels& tk = k.texture;
   const Dims& d = grid.dims;
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz;
   const Stencil sten = stencil(d);
   const bool full = sten.present == 63;  // all six neighbours: the row kernels for them
-  const float* p = grid.values();
+  const float* p = grid.values();  // null for a grid read through a source
+  const MapSource* const source = grid.source;
   // Pass 1: the parked step of every interior voxel, in the code array, and the distribution of
   // the non-zero contrasts (per-thread histograms summed in thread order: integer counts, so the
   // total is exact whoever counted what). Threads take groups of planes from a shared counter (a
@@ -132,25 +137,40 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
   std::atomic<bool> bad_values{false};
   const bool by_rows = full && tk.checks_values;
   const std::size_t plane = nx * ny;
-  auto plane_ok = [&](std::size_t z) { return by_rows || tk.values_in_range(p + plane * z, plane); };
+  // A grid read through a source: each thread converts the planes it reads into a ring of three
+  // (planes z - 1, z and z + 1 while plane z is computed), checked as they are converted, and its
+  // rows' neighbours in z are found through offsets between the ring's planes.
+  const auto ring_plane = [&](float* ring, std::size_t z) { return ring + plane * (z % 3); };
+  // Plane z made ready to be read (converted, for a source), false when it holds a bad value.
+  auto plane_ok = [&](float* ring, std::size_t z) {
+    if (source) return source->read(plane * z, plane, ring_plane(ring, z));
+    return by_rows || tk.values_in_range(p + plane * z, plane);
+  };
   std::atomic<std::size_t> next_group{0};
   // Planes [z0, z1) into the histograms h; false when a value outside [0, 1] was seen. A function
   // of its own: GCC compiled it slower inlined into the loop over groups below.
-  const auto planes = [&](std::size_t z0, std::size_t z1, std::uint64_t* h,
-                          std::uint16_t* list_data) __attribute__((noinline)) {
-    bool ok = (z0 == 0 || plane_ok(z0 - 1)) && plane_ok(z0);
+  const auto planes = [&](std::size_t z0, std::size_t z1, std::uint64_t* h, std::uint16_t* list_data,
+                          float* ring) __attribute__((noinline)) {
+    bool ok = (z0 == 0 || plane_ok(ring, z0 - 1)) && plane_ok(ring, z0);
     for (std::size_t z = z0; ok && z < z1; ++z) {
-      if (z + 1 < nz && !(ok = plane_ok(z + 1))) break;
+      if (z + 1 < nz && !(ok = plane_ok(ring, z + 1))) break;
+      const float* const pz = source ? ring_plane(ring, z) : p + plane * z;
+      std::ptrdiff_t off[6];
+      std::copy(sten.off, sten.off + 6, off);
+      if (source && (sten.present & 48u) && z > 0 && z + 1 < nz) {  // (faces have no interior rows)
+        off[4] = ring_plane(ring, z - 1) - pz;
+        off[5] = ring_plane(ring, z + 1) - pz;
+      }
       for (std::size_t y = 0; ok && y < ny; ++y) {
         // Plane z + 2 is fetched from memory into L2 while plane z is computed.
-        if (z + 2 < nz) prefetch_row(p + nx * (y + ny * (z + 2)), nx * sizeof(float));
+        if (!source && z + 2 < nz) prefetch_row(p + nx * (y + ny * (z + 2)), nx * sizeof(float));
         code_t* row = codes + nx * (y + ny * z);
-        const float* const prow = p + nx * (y + ny * z);
+        const float* const prow = pz + nx * y;
         std::size_t x0 = 0, x1 = 0;
         if (!interior_row(d, y, z, x0, x1)) {
           std::fill(row, row + nx, kNoTexture);
           ok = !by_rows || tk.values_in_range(prow, nx);
-          if (rows) rows->row(rows->self, y, z);
+          if (rows) rows->row(rows->self, y, z, prow);
           continue;
         }
         std::fill(row, row + x0, kNoTexture);
@@ -162,14 +182,14 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
         // then reads 3 bytes per voxel instead of the map's rows again.
         std::uint8_t* lrow = lbp_scratch ? lbp_scratch + nx * (y + ny * z) + x0 : nullptr;
         bool rechecks = true;  // unless the kernel says there are none
-        if (full) ok = tk.contrast_row(prow0, sten.off, n, row + x0, lrow, rechecks) && ok;
-        else tk.contrast_row_any(prow0, sten.off, n, sten.present, row + x0, lrow);
+        if (full) ok = tk.contrast_row(prow0, off, n, row + x0, lrow, rechecks) && ok;
+        else tk.contrast_row_any(prow0, off, n, sten.present, row + x0, lrow);
         if (rechecks && tk.any_recheck(row + x0, n)) {
           for (std::size_t x = x0; x < x1; ++x)
-            if (row[x] == kRecheckStep) row[x] = exact_step(prow + x, sten.off, sten.present);
+            if (row[x] == kRecheckStep) row[x] = exact_step(prow + x, off, sten.present);
         }
         tk.count_steps(row + x0, n, h, list_data);
-        if (rows) rows->row(rows->self, y, z);
+        if (rows) rows->row(rows->self, y, z, prow);
       }
     }
     return ok;
@@ -178,10 +198,12 @@ void detail::compute_texture_into(const Grid& grid, int contrast_bins, int threa
     for (std::size_t i = b; i < e; ++i) {
       std::uint64_t* h = part[i].data();
       ThreadScratch<std::uint16_t> list(nx + 32);  // count_steps' room
+      ThreadScratch<float> ring(source ? 3 * plane : 0);
       for (std::size_t gi; (gi = next_group.fetch_add(1, std::memory_order_relaxed)) < groups;) {
         if (bad_values.load(std::memory_order_relaxed)) break;  // the map is rejected anyway
         const std::size_t z0 = gi * G;
-        if (!planes(z0, std::min(nz, z0 + G), h, list.data())) bad_values.store(true, std::memory_order_relaxed);
+        if (!planes(z0, std::min(nz, z0 + G), h, list.data(), ring.data()))
+          bad_values.store(true, std::memory_order_relaxed);
       }
     }
   });
