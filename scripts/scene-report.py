@@ -6,14 +6,15 @@ usage: scripts/scene-report.py [--build build] [--work DIR] [--real-only | --sim
                                [--before NAME=VALUE,...] [--scenes NAME,...] [--reuse]
 
 "before" is the default preset with the rules off (object_gap=0, min_object_voxels=0,
-min_pocket_voxels=0, surface_band=0, structure_planes=0: the labels of the default preset before the rules); "after"
+min_pocket_voxels=0, surface_band=0, structure_planes=0, plane_holes=0: the labels of the default preset before the
+rules); "after"
 is the default preset as it is. `--before surface_band=0` compares with the default preset
-without the surface band (rule 10), `--before structure_planes=0` without rule 11
-(docs/experiments.md, "The surface band", "Structure and objects"). Real files are read from
-../shared/data/ (relative to the repository root). `--scenes building` reports the simulated
-building (its own dims, 5 cm voxels and rings scans unless --sim-dims is given; docs/experiments.md,
-"A simulated building"); `--reuse` keeps simulations already in --work (WORK/sim-SCENE) instead of
-simulating again."""
+without the surface band (rule 10), `--before structure_planes=0` without rule 11,
+`--before plane_holes=0` without rule 12 (docs/experiments.md, "The surface band", "Structure and
+objects", "Holes in a plane seen edge-on"). Real files are read from ../shared/data/ (relative to
+the repository root). `--scenes building` reports the simulated building (its own dims, 5 cm voxels
+and rings scans unless --sim-dims is given; docs/experiments.md, "A simulated building"); `--reuse`
+keeps simulations already in --work (WORK/sim-SCENE) instead of simulating again."""
 import argparse
 import json
 import os
@@ -24,7 +25,7 @@ import tempfile
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DATA = os.path.join(os.path.dirname(ROOT), "shared", "data")
 OFF = ["--param", "object_gap=0", "--param", "min_object_voxels=0", "--param", "min_pocket_voxels=0",
-       "--param", "surface_band=0", "--param", "structure_planes=0"]
+       "--param", "surface_band=0", "--param", "structure_planes=0", "--param", "plane_holes=0"]
 REAL = [("geb079.bt (native 8 cm)", "geb079.bt", []),
         ("office1.pcd at 2 cm", "office1.pcd", ["--voxel-size", "0.02"]),
         ("table scene at 1 cm", "table_scene_mug_stereo_textured.pcd", ["--voxel-size", "0.01"]),

@@ -94,10 +94,10 @@ static void param_table(void **state) {
   static const char *const names[] = {"preset", "smax", "smin", "split_ratio", "contrast_bins", "free_below",
                                       "occupied_above", "lookahead", "refine_passes", "gap_radius", "occupied_connectivity", "support_plane",
                                       "object_gap", "min_object_voxels", "min_pocket_voxels", "surface_band",
-                                      "structure_planes", "structure_extent", "threads",
+                                      "structure_planes", "structure_extent", "plane_holes", "threads",
                                       "texture", "similarity"};
   (void)state;
-  assert_int_equal(n, 21); /* built-in parameters only: this suite loads no plugin */
+  assert_int_equal(n, 22); /* built-in parameters only: this suite loads no plugin */
   for (i = 0; i < n; ++i) {
     assert_string_equal(occseg_param_name(i), names[i]);
     assert_true(strlen(occseg_param_description(i)) > 10);
@@ -117,7 +117,7 @@ static void param_table(void **state) {
   assert_null(occseg_param_name(n));
   assert_null(occseg_param_kind(n));
   assert_null(occseg_param_description(UINT32_MAX));
-  EXPECT_FAIL(occseg_param_bounds(n, &lo, &hi), OCCSEG_ERANGE, "index 21 is out of range");
+  EXPECT_FAIL(occseg_param_bounds(n, &lo, &hi), OCCSEG_ERANGE, "index 22 is out of range");
   EXPECT_FAIL(occseg_param_bounds(0, NULL, &hi), OCCSEG_EINVAL, "'min'");
   EXPECT_FAIL(occseg_param_bounds(0, &lo, NULL), OCCSEG_EINVAL, "'max'");
   EXPECT_FAIL(occseg_param_find("nope", &idx), OCCSEG_EINVAL, "parameter 'nope': no such parameter");

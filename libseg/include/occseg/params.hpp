@@ -59,6 +59,12 @@ struct Params {
   // its extent, join it (a table top seen edge-on in pieces).
   int structure_planes = 32;
   double structure_extent = 2.0;
+  // default preset only (rules/plane_holes.hpp; 0: off, as in the paper preset): a free voxel in
+  // the inlier band of a plane piece found by rule 11, inside its extent, whose run of free voxels
+  // along one of the plane's in-plane axes is at most plane_holes voxels long and ends at a
+  // non-free voxel of the band on both sides (one of them occupied), becomes occupied: rays that
+  // graze a thin surface seen edge-on cross it; a door or a window is a larger hole and stays free.
+  int plane_holes = 4;
   int threads = 0;             // 0: all cores. Results never depend on it.
   // Texture operator, by name (occseg/registry.hpp). "auto" (both presets): lbp8, the authors'
   // 2D operator, on a one-layer map (nz = 1), lbp6 on any other (resolved_texture).

@@ -45,6 +45,7 @@ Params Params::paper() {
   p.min_pocket_voxels = 0;
   p.surface_band = 0;
   p.structure_planes = 0;
+  p.plane_holes = 0;
   return p;
 }
 
@@ -70,6 +71,7 @@ const std::vector<ParamInfo>& param_table() {
       {"surface_band", "int", 0, 16, "default preset: free voxels in thin free space within this many face steps of an occupied and of an unknown voxel become occupied (the noisy band inside a surface); 0 = off"},
       {"structure_planes", "int", 0, 256, "default preset: planes searched per occupied segment; those spanning structure_extent both ways are structure (floor, walls, ceiling), what stands on or against them objects; 0 = off"},
       {"structure_extent", "double", 0.001, 1e6, "default preset: metres a plane must span in both of its directions to be structure (rule 11)"},
+      {"plane_holes", "int", 0, 16, "default preset: free runs of at most this many voxels along a plane piece's in-plane axes, inside its extent and between non-free voxels of its band, become occupied (rule 12); 0 = off"},
       {"threads", "int", 0, 1024, "worker threads, 0 = all cores; results never depend on it"},
       {"texture", "string", 0, 0, "texture operator by name: auto (lbp8 when nz = 1, else lbp6), lbp6 (paper, 3D), lbp8 (3x3, 2D maps) or one a plugin adds"},
       {"similarity", "string", 0, 0, "histogram similarity of the division by name: g (eq. 1), chi2 or one a plugin adds"},
@@ -181,6 +183,7 @@ void Params::validate() const {
   check("surface_band", surface_band);
   check("structure_planes", structure_planes);
   check("structure_extent", structure_extent);
+  check("plane_holes", plane_holes);
   check("threads", threads);
   if (!is_pow2(smax)) bad("smax", std::to_string(smax) + " is not a power of two");
   if (!is_pow2(smin)) bad("smin", std::to_string(smin) + " is not a power of two");
@@ -230,6 +233,7 @@ void set_param(Params& p, const std::string& name, const std::string& value) {
   else if (name == "min_pocket_voxels") p.min_pocket_voxels = static_cast<int>(v);
   else if (name == "surface_band") p.surface_band = static_cast<int>(v);
   else if (name == "structure_planes") p.structure_planes = static_cast<int>(v);
+  else if (name == "plane_holes") p.plane_holes = static_cast<int>(v);
   else if (name == "structure_extent") p.structure_extent = v;
   else if (name == "threads") p.threads = static_cast<int>(v);
 }
@@ -254,6 +258,7 @@ std::string get_param(const Params& p, const std::string& name) {
   else if (name == "min_pocket_voxels") o << p.min_pocket_voxels;
   else if (name == "surface_band") o << p.surface_band;
   else if (name == "structure_planes") o << p.structure_planes;
+  else if (name == "plane_holes") o << p.plane_holes;
   else if (name == "structure_extent") o << p.structure_extent;
   else if (name == "threads") o << p.threads;
   else if (name == "texture") o << p.texture;

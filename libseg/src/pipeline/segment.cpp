@@ -19,6 +19,7 @@
 #include "rules/objects.hpp"
 #include "rules/planes.hpp"
 #include "rules/surface_band.hpp"
+#include "rules/plane_holes.hpp"
 #include "rules/structure.hpp"
 #include "stages/refine.hpp"
 #include "occseg/registry.hpp"
@@ -250,7 +251,10 @@ Result segment_into(const Grid& input, const Params& requested, bool keep_stages
     group_objects(grid, r.labels, r.segments, params, &band_voxels);
     // Rule 11 before rule 5: a segment it makes structure (several planes) is not split again at
     // its largest plane alone (which would cut the walls off a floor as objects standing on it).
-    split_structure(grid, r.labels, r.segments, params, k);
+    std::vector<PlanePiece> pieces;
+    split_structure(grid, r.labels, r.segments, params, k, params.plane_holes > 0 ? &pieces : nullptr);
+    // Rule 12 on rule 11's pieces, before rule 5 looks at what its planes see.
+    fill_plane_holes(grid, r.labels, r.segments, params, pieces);
     if (params.support_plane > 0)
       split_support_planes(grid, r.labels, r.segments, static_cast<std::size_t>(params.support_plane),
                            params.occupied_connectivity == 26, params.threads, k);

@@ -51,6 +51,7 @@ struct Piece {
   double u0 = 0, u1 = 0, v0 = 0, v1 = 0;
   std::array<std::uint32_t, 3> lo{}, hi{};  // box of its voxels
   std::size_t voxels = 0;
+  std::uint64_t voxel = 0;  // its first inlier (a voxel index)
   bool structural = false;
   double min_height = 0;      // max(kMinObjectHeight, kNoiseHeights x sigma)
   bool open[2] = {false, false};  // along +n, -n: the side sees free space
@@ -91,7 +92,7 @@ class Structure {
     margin_ = p.object_gap + 1;
   }
 
-  void run() {
+  void run(std::vector<PlanePiece>* out) {
     const std::size_t original = segs_.size();
     std::vector<std::uint32_t> candidates;
     std::size_t boxes = 0;
@@ -130,6 +131,9 @@ class Structure {
       examine(candidates[c]);
     }
     attract_fragments();
+    if (out)
+      for (const Piece& pc : pieces_)
+        out->push_back({pc.pl.n, pc.pl.d, pc.u, pc.v, pc.u0, pc.u1, pc.v0, pc.v1, pc.lo, pc.hi, pc.voxel});
   }
 
  private:
@@ -408,7 +412,10 @@ class Structure {
         const double a = dot(q, u), b = dot(q, v);
         std::array<double, 5>& m = mom[piece[i]];
         m[0] += a, m[1] += b, m[2] += a * a, m[3] += a * b, m[4] += b * b;
-        if (pc.voxels == 0) pc.lo = pc.hi = {std::uint32_t(q[0]), std::uint32_t(q[1]), std::uint32_t(q[2])};
+        if (pc.voxels == 0) {
+          pc.lo = pc.hi = {std::uint32_t(q[0]), std::uint32_t(q[1]), std::uint32_t(q[2])};
+          pc.voxel = members_[inl[i]];
+        }
         for (int k = 0; k < 3; ++k)
           pc.lo[k] = std::min(pc.lo[k], std::uint32_t(q[k])), pc.hi[k] = std::max(pc.hi[k], std::uint32_t(q[k]));
         ++pc.voxels;
@@ -751,10 +758,10 @@ class Structure {
 }  // namespace
 
 void split_structure(const Grid& grid, LabelArray& labels, std::vector<Segment>& segments, const Params& params,
-                     const kernels::Table& k) {
+                     const kernels::Table& k, std::vector<PlanePiece>* pieces) {
   // (A one-layer map's walls are lines and its one layer the only "plane": nothing to find.)
   if (params.structure_planes <= 0 || params.support_plane <= 0 || segments.empty() || grid.dims.nz == 1) return;
-  Structure(grid, labels, segments, params, k).run();
+  Structure(grid, labels, segments, params, k).run(pieces);
 }
 
 }  // namespace occseg

@@ -6,6 +6,7 @@
 // against them as objects. It runs before the support planes (which skip the segments it made
 // structure) and the kinds.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -15,6 +16,20 @@
 #include "occseg/result.hpp"
 
 namespace occseg {
+
+// A piece of a plane that rule 11 keeps for coplanar fragments (a structural piece, or a piece of
+// at least support_plane voxels of a segment left whole), for rule 12 (rules/plane_holes.hpp):
+// the plane n . x = d (x in voxel indices), its principal axes u, v in the plane with the
+// inliers' extent along them [u0, u1] x [v0, v1], the box of its inliers, and one inlier (a voxel
+// index): its label after split_structure is the piece's segment.
+struct PlanePiece {
+  std::array<double, 3> n{0, 0, 1};
+  double d = 0;
+  std::array<double, 3> u{}, v{};
+  double u0 = 0, u1 = 0, v0 = 0, v1 = 0;
+  std::array<std::uint32_t, 3> lo{}, hi{};
+  std::uint64_t voxel = 0;
+};
 
 // For every occupied segment with at least 2 x support_plane voxels, at least half of a 4096-voxel
 // sample of which is thin along some axis (at most max(4, object_gap + 2) voxels through it,
@@ -45,7 +60,8 @@ namespace occseg {
 // Nothing is done on a one-layer map (nz = 1). Statistics of changed segments are recomputed (in
 // scan order, or combined for joins as in rules/objects.hpp). One thread (the final relabelling
 // pass on params.threads): results never depend on params.threads or the kernels `k`.
+// `pieces`, when given, receives the pieces that gathered fragments (in search order).
 void split_structure(const Grid& grid, LabelArray& labels, std::vector<Segment>& segments, const Params& params,
-                     const kernels::Table& k = kernels::active());
+                     const kernels::Table& k = kernels::active(), std::vector<PlanePiece>* pieces = nullptr);
 
 }  // namespace occseg
