@@ -348,7 +348,8 @@ class Structure {
           W thin_of[3];
           {  // x: the row's bits shifted, across its words
             const W next = w + 1 < wpr ? row[w + 1] : 0, prev = w > 0 ? row[w - 1] : 0;
-            for (int k = 1; k <= L; ++k) bp[k] = (own >> k) | (next << (64 - k)), bm[k] = (own << k) | (prev >> (64 - k));
+            for (int k = 1; k <= L; ++k)
+              bp[k] = (own >> k) | (next << (64 - k)), bm[k] = (own << k) | (prev >> (64 - k));
             thin_of[0] = ~thick(bp, bm);
           }
           // y: the rows beside it in its layer; z: the rows above and below it
@@ -507,10 +508,10 @@ class Structure {
             rest[t] = rest[r], rx[t] = rx[r], ry[t] = ry[r], rz[t] = rz[r];
           }
         } else if (kept != b) {
-          std::copy(rest.begin() + std::ptrdiff_t(b), rest.begin() + std::ptrdiff_t(e), rest.begin() + std::ptrdiff_t(kept));
-          std::copy(rx.begin() + std::ptrdiff_t(b), rx.begin() + std::ptrdiff_t(e), rx.begin() + std::ptrdiff_t(kept));
-          std::copy(ry.begin() + std::ptrdiff_t(b), ry.begin() + std::ptrdiff_t(e), ry.begin() + std::ptrdiff_t(kept));
-          std::copy(rz.begin() + std::ptrdiff_t(b), rz.begin() + std::ptrdiff_t(e), rz.begin() + std::ptrdiff_t(kept));
+          std::copy(rest.data() + b, rest.data() + e, rest.data() + kept);
+          std::copy(rx.data() + b, rx.data() + e, rx.data() + kept);
+          std::copy(ry.data() + b, ry.data() + e, ry.data() + kept);
+          std::copy(rz.data() + b, rz.data() + e, rz.data() + kept);
         }
         kept += e - b;
       };
