@@ -4,6 +4,7 @@
 // cap, bounds that cut a cost short; rows of labels of every length and offset up to three words.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -108,6 +109,42 @@ TEST_P(KernelsPlanes, CostPairMatchesScalarCostBitForBit) {
           // The pair's results are the level's cost() alone, bit for bit.
           ASSERT_TRUE(same_bits(ga, level().cost(s.points(), a, kCap, stop))) << n << " points, stop " << stop;
           ASSERT_TRUE(same_bits(gb, level().cost(s.points(), b, kCap, stop))) << n << " points, stop " << stop;
+        }
+      }
+    }
+}
+
+// cost_inliers(): the cost is cost()'s bit for bit (at or above the bound, a sum at or above
+// it), and below the bound the list is exactly the points with |distance| <= the inlier distance,
+// computed here one point at a time (kind 2 puts points on the plane and about that distance off).
+TEST_P(KernelsPlanes, CostInliersMatchesCostAndListsTheInliers) {
+  test::Rng r(9);
+  for (std::size_t n : kCounts)
+    for (int kind = 0; kind < 4; ++kind) {
+      const Sample s = sample(n, kind, r);
+      for (int p = 0; p < 4; ++p) {
+        const kernels::MsacPlane pl = kind == 2 && p == 0 ? kernels::MsacPlane{0.0, -0.0, 1.0, 0.5} : random_plane(r);
+        const double inf = std::numeric_limits<double>::infinity();
+        const double full = scalar().cost(s.points(), pl, kCap, inf);
+        std::vector<std::uint32_t> want;
+        for (std::size_t i = 0; i < n; ++i) {
+          const double e = pl.n0 * s.x[i] + pl.n1 * s.y[i] + pl.n2 * s.z[i] - pl.d;
+          if (std::fabs(e) <= kPlaneInlierDistance) want.push_back(static_cast<std::uint32_t>(i));
+        }
+        for (double stop : {inf, 0.5 * full, full, 0.0}) {
+          for (const kernels::PlanesKernels* k : {&scalar(), &level()}) {
+            std::vector<std::uint32_t> out(n + 1, 0xFFFFFFFFu);
+            std::size_t count = ~std::size_t(0);
+            const double got = k->cost_inliers(s.points(), pl, kCap, stop, kPlaneInlierDistance, out.data(), count);
+            EXPECT_EQ(out[n], 0xFFFFFFFFu) << "written past the room for n positions";
+            if (full < stop) {
+              ASSERT_TRUE(same_bits(got, full)) << n << " points of kind " << kind << ", stop " << stop;
+              ASSERT_EQ(count, want.size()) << n << " points of kind " << kind;
+              ASSERT_TRUE(std::equal(want.begin(), want.end(), out.begin())) << n << " points of kind " << kind;
+            } else {
+              ASSERT_GE(got, stop) << n << " points of kind " << kind << ", stop " << stop;
+            }
+          }
         }
       }
     }

@@ -35,6 +35,12 @@ struct PlanesKernels {
   // cost() of two planes, each result as cost() says.
   void (*cost_pair)(const PlanePoints& pts, const MsacPlane& a, const MsacPlane& b, double cap, double stop,
                     double& cost_a, double& cost_b);
+  // cost() that also lists the positions i of the points with |e| <= `inlier` (e as cost()
+  // computes it), ascending, into out[0 ..) (room for pts.n), their number into `count`: one pass
+  // for a refit's cost and its inliers. The list and count are complete when the cost returned is
+  // below `stop`; else they are unspecified (out[0 .. pts.n) may have been written).
+  double (*cost_inliers)(const PlanePoints& pts, const MsacPlane& pl, double cap, double stop, double inlier,
+                         std::uint32_t* out, std::size_t& count);
   // Which of the labels row[x0 .. x1) equal s (x0 < x1): bit k % 64 of bits[k / 64] for
   // row[x0 + k], the bits past x1 - x0 clear (the words past the last one untouched). Returns how
   // many.

@@ -8,6 +8,8 @@ namespace scalar {
 double planes_cost(const PlanePoints& pts, const MsacPlane& pl, double cap, double stop);
 void planes_cost_pair(const PlanePoints& pts, const MsacPlane& a, const MsacPlane& b, double cap, double stop,
                       double& cost_a, double& cost_b);
+double planes_cost_inliers(const PlanePoints& pts, const MsacPlane& pl, double cap, double stop, double inlier,
+                           std::uint32_t* out, std::size_t& count);
 std::size_t planes_row_members(const std::uint32_t* row, std::size_t x0, std::size_t x1, std::uint32_t s,
                                std::uint64_t* bits);
 }  // namespace scalar
@@ -17,6 +19,8 @@ namespace avx2 {
 double planes_cost(const PlanePoints& pts, const MsacPlane& pl, double cap, double stop);
 void planes_cost_pair(const PlanePoints& pts, const MsacPlane& a, const MsacPlane& b, double cap, double stop,
                       double& cost_a, double& cost_b);
+double planes_cost_inliers(const PlanePoints& pts, const MsacPlane& pl, double cap, double stop, double inlier,
+                           std::uint32_t* out, std::size_t& count);
 std::size_t planes_row_members(const std::uint32_t* row, std::size_t x0, std::size_t x1, std::uint32_t s,
                                std::uint64_t* bits);
 }  // namespace avx2

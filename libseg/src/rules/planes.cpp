@@ -109,31 +109,20 @@ void sample_cost_pair(const kernels::PlanesKernels& k, const Coords& c, const Pl
   k.cost_pair(c.points(), msac(a), msac(b), kCap, stop, cost_a, cost_b);
 }
 
-// The positions in `pts` of the points within kPlaneInlierDistance of `pl`, ascending, into
-// out[0 ..) (room for pts.size()); returns how many.
-std::size_t inlier_positions(const std::vector<Vec>& pts, const Plane& pl, std::uint32_t* out) {
-  std::size_t n = 0;
-  for (std::size_t i = 0; i < pts.size(); ++i) {  // (without a branch per point)
-    out[n] = static_cast<std::uint32_t>(i);
-    n += std::fabs(pl.distance(pts[i][0], pts[i][1], pts[i][2])) <= kPlaneInlierDistance;
-  }
-  return n;
-}
-
 // Least-squares plane through the points of `pts` at positions `inl` (ascending: the sums run in
-// point order); false if degenerate.
-bool refit(const std::vector<Vec>& pts, const std::uint32_t* inl, std::size_t n, Plane& out) {
+// point order); false if degenerate. (The scatter matrix's lower triangle is its upper one:
+// q[a] * q[b] and q[b] * q[a] are the same product, summed in the same order.)
+bool refit(const kernels::PlanePoints& pts, const std::uint32_t* inl, std::size_t n, Plane& out) {
   Vec mean{0, 0, 0};
-  for (std::size_t j = 0; j < n; ++j)
-    for (int k = 0; k < 3; ++k) mean[k] += pts[inl[j]][k];
+  for (std::size_t j = 0; j < n; ++j) mean[0] += pts.x[inl[j]], mean[1] += pts.y[inl[j]], mean[2] += pts.z[inl[j]];
   if (n < 3) return false;
   for (double& m : mean) m /= double(n);
-  double c[3][3] = {};
+  double c00 = 0, c01 = 0, c02 = 0, c11 = 0, c12 = 0, c22 = 0;
   for (std::size_t j = 0; j < n; ++j) {
-    const Vec q = sub(pts[inl[j]], mean);
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) c[a][b] += q[a] * q[b];
+    const double q0 = pts.x[inl[j]] - mean[0], q1 = pts.y[inl[j]] - mean[1], q2 = pts.z[inl[j]] - mean[2];
+    c00 += q0 * q0, c01 += q0 * q1, c02 += q0 * q2, c11 += q1 * q1, c12 += q1 * q2, c22 += q2 * q2;
   }
+  double c[3][3] = {{c00, c01, c02}, {c01, c11, c12}, {c02, c12, c22}};
   const Vec nrm = smallest_eigenvector(c);
   const double len = std::sqrt(dot(nrm, nrm));
   if (!(len > 0.5)) return false;
@@ -237,27 +226,33 @@ bool sample_plane(const std::vector<Vec>& sample, std::uint64_t seed, Plane& bes
 // Two least-squares refits over all points: the best draw passes through three noisy voxels, the
 // fit through all its inliers sits in the middle of a thick layer. Returns the inlier count; `inl`
 // receives the inliers' positions in `points`, ascending. The costs are the kernels' (cost()'s
-// sum bit for bit), a refit's cut short once it cannot beat the plane it refits; the inliers of
-// a plane a refit started from are not looked for again.
+// sum bit for bit), a refit's cut short once it cannot beat the plane it refits; each pass lists
+// its plane's inliers as it sums the cost (cost_inliers), so the plane kept has its inliers
+// listed already.
+std::size_t refine_plane(const kernels::PlanePoints& all, Plane& best, const kernels::PlanesKernels& k,
+                         std::vector<std::uint32_t>& inl) {
+  const std::unique_ptr<std::uint32_t[]> buffer(new std::uint32_t[2 * all.n + 1]);
+  std::uint32_t* listed = buffer.get();       // best's inliers, n of them
+  std::uint32_t* trial = listed + all.n;      // a refit's
+  std::size_t n = 0, m = 0;
+  double best_cost =
+      k.cost_inliers(all, msac(best), kCap, std::numeric_limits<double>::infinity(), kPlaneInlierDistance, listed, n);
+  for (int r = 0; r < 2; ++r) {
+    Plane fit;
+    if (!refit(all, listed, n, fit)) break;
+    const double c = k.cost_inliers(all, msac(fit), kCap, best_cost, kPlaneInlierDistance, trial, m);
+    if (!(c < best_cost)) break;
+    best = fit, best_cost = c, n = m;
+    std::swap(listed, trial);
+  }
+  inl.assign(listed, listed + n);
+  return n;
+}
+
 std::size_t refine_plane(const std::vector<Vec>& points, Plane& best, const kernels::PlanesKernels& k,
                          std::vector<std::uint32_t>& inl) {
   const Coords all(points);
-  const std::unique_ptr<std::uint32_t[]> buffer(new std::uint32_t[points.size()]);
-  double best_cost = k.cost(all.points(), msac(best), kCap, std::numeric_limits<double>::infinity());
-  std::size_t n = 0;
-  bool listed = false;  // buffer[0, n) holds best's inliers
-  for (int r = 0; r < 2; ++r) {
-    n = inlier_positions(points, best, buffer.get());
-    listed = true;
-    Plane fit;
-    if (!refit(points, buffer.get(), n, fit)) break;
-    const double c = k.cost(all.points(), msac(fit), kCap, best_cost);
-    if (!(c < best_cost)) break;
-    best = fit, best_cost = c, listed = false;
-  }
-  if (!listed) n = inlier_positions(points, best, buffer.get());
-  inl.assign(buffer.get(), buffer.get() + n);
-  return n;
+  return refine_plane(all.points(), best, k, inl);
 }
 
 }  // namespace
@@ -273,9 +268,15 @@ void detail::msac_cost_pair(const std::vector<Vec>& points, const Plane& a, cons
 
 bool fit_dominant_plane(const std::vector<Vec>& points, std::uint64_t seed, Plane& plane, std::size_t& inliers,
                         int threads, const kernels::Table& k, int axis, std::vector<std::uint32_t>* positions) {
+  const Coords all(points);
+  return fit_dominant_plane(all.points(), seed, plane, inliers, threads, k, axis, positions);
+}
+
+bool fit_dominant_plane(const kernels::PlanePoints& points, std::uint64_t seed, Plane& plane, std::size_t& inliers,
+                        int threads, const kernels::Table& k, int axis, std::vector<std::uint32_t>* positions) {
   inliers = 0;
   std::vector<Vec> sample;
-  for_sample(points.size(), [&](std::size_t i) { sample.push_back(points[i]); });
+  for_sample(points.n, [&](std::size_t i) { sample.push_back({points.x[i], points.y[i], points.z[i]}); });
   if (positions) positions->clear();
   if (!sample_plane(sample, seed, plane, threads, k.planes, axis)) return false;
   std::vector<std::uint32_t> own;

@@ -44,6 +44,10 @@ struct Plane {
 bool fit_dominant_plane(const std::vector<std::array<double, 3>>& points, std::uint64_t seed, Plane& plane,
                         std::size_t& inliers, int threads = 1, const kernels::Table& k = kernels::active(),
                         int axis = -1, std::vector<std::uint32_t>* positions = nullptr);
+// The same over points given by coordinate (point i is (x[i], y[i], z[i])): the same result bit
+// for bit, without a copy of them.
+bool fit_dominant_plane(const kernels::PlanePoints& points, std::uint64_t seed, Plane& plane, std::size_t& inliers,
+                        int threads, const kernels::Table& k, int axis, std::vector<std::uint32_t>* positions);
 
 // Splits every occupied segment (not already `structure`: rule 11, rules/structure.hpp, split it
 // at several planes) with at least `min_plane` voxels whose dominant plane holds at

@@ -183,13 +183,18 @@ class Structure {
   std::vector<std::uint32_t> plane_pieces(const std::vector<std::uint32_t>& inl, const Vec& u, const Vec& v,
                                           std::size_t& count, std::vector<std::size_t>& cells_of,
                                           std::vector<std::size_t>& inner) const {
-    std::vector<std::pair<std::int64_t, std::int64_t>> cell(inl.size());
+    // A cell (a, b) is the key (a + 2^31) 2^32 + (b + 2^31): keys sort as the pairs do (the
+    // coordinates are far inside 32 bits), and a neighbour's key is the cell's plus du 2^32 + dv.
+    const auto key = [](std::int64_t a, std::int64_t b) {
+      return (std::uint64_t(a + (std::int64_t(1) << 31)) << 32) | std::uint64_t(b + (std::int64_t(1) << 31));
+    };
+    std::vector<std::uint64_t> cell(inl.size());
     for (std::size_t i = 0; i < inl.size(); ++i) {
       const Vec& q = pts_[inl[i]];
-      cell[i] = {static_cast<std::int64_t>(std::floor(dot(q, u) / cell_)),
-                 static_cast<std::int64_t>(std::floor(dot(q, v) / cell_))};
+      cell[i] = key(static_cast<std::int64_t>(std::floor(dot(q, u) / cell_)),
+                    static_cast<std::int64_t>(std::floor(dot(q, v) / cell_)));
     }
-    std::vector<std::pair<std::int64_t, std::int64_t>> cells = cell;
+    std::vector<std::uint64_t> cells = cell;
     std::sort(cells.begin(), cells.end());
     cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
     std::vector<std::uint32_t> parent(cells.size());
@@ -198,18 +203,29 @@ class Structure {
       while (parent[a] != a) a = parent[a] = parent[parent[a]];
       return a;
     };
-    for (std::size_t c = 0; c < cells.size(); ++c)
-      for (int du = -1; du <= 1; ++du)
-        for (int dv = -1; dv <= 1; ++dv) {
-          if (du < 0 || (du == 0 && dv <= 0)) continue;  // each pair once
-          const std::pair<std::int64_t, std::int64_t> w{cells[c].first + du, cells[c].second + dv};
-          const auto it = std::lower_bound(cells.begin(), cells.end(), w);
-          if (it == cells.end() || *it != w) continue;
-          std::uint32_t a = find(static_cast<std::uint32_t>(c)), b = find(static_cast<std::uint32_t>(it - cells.begin()));
-          if (a == b) continue;
-          if (a > b) std::swap(a, b);
-          parent[b] = a;
-        }
+    const auto neighbour = [](std::uint64_t c, int du, int dv) {
+      return c + (std::uint64_t(std::int64_t(du)) << 32) + std::uint64_t(std::int64_t(dv));
+    };
+    // Each pair of 8-adjacent cells once: (a, b + 1), then (a + 1, b + dv) for dv = -1, 0, 1. For
+    // each dv the keys grow with c, so they are found by a pointer per dv that only moves forward
+    // (ahead[dv + 1]: the first cell at or after the last such key), not by binary searches.
+    const std::size_t C = cells.size();
+    const auto join = [&](std::size_t c, std::size_t d) {
+      std::uint32_t a = find(static_cast<std::uint32_t>(c)), b = find(static_cast<std::uint32_t>(d));
+      if (a == b) return;
+      if (a > b) std::swap(a, b);
+      parent[b] = a;
+    };
+    std::size_t ahead[3] = {0, 0, 0};
+    for (std::size_t c = 0; c < C; ++c) {
+      if (c + 1 < C && cells[c + 1] == neighbour(cells[c], 0, 1)) join(c, c + 1);
+      for (int dv = -1; dv <= 1; ++dv) {
+        const std::uint64_t w = neighbour(cells[c], 1, dv);
+        std::size_t& at = ahead[dv + 1];
+        while (at < C && cells[at] < w) ++at;
+        if (at < C && cells[at] == w) join(c, at);
+      }
+    }
     // Pieces numbered by their first cell.
     std::vector<std::uint32_t> number(cells.size(), ~0u);
     count = 0;
@@ -219,14 +235,17 @@ class Structure {
     }
     cells_of.assign(count, 0);
     inner.assign(count, 0);
-    const auto has = [&](std::int64_t a, std::int64_t b) {
-      return std::binary_search(cells.begin(), cells.end(), std::pair<std::int64_t, std::int64_t>{a, b});
-    };
-    for (std::size_t c = 0; c < cells.size(); ++c) {
+    // A cell is inner when its four in-plane neighbours are cells: (a, b -+ 1) are the cells beside
+    // it in the sorted list, (a -+ 1, b) found by forward-only pointers as above.
+    std::size_t behind = 0, after = 0;
+    for (std::size_t c = 0; c < C; ++c) {
       const std::uint32_t k = number[find(static_cast<std::uint32_t>(c))];
       ++cells_of[k];
-      const auto [a, b] = cells[c];
-      inner[k] += has(a - 1, b) && has(a + 1, b) && has(a, b - 1) && has(a, b + 1);
+      const std::uint64_t w = cells[c], wm = neighbour(w, -1, 0), wp = neighbour(w, 1, 0);
+      while (behind < C && cells[behind] < wm) ++behind;
+      while (after < C && cells[after] < wp) ++after;
+      inner[k] += behind < C && cells[behind] == wm && after < C && cells[after] == wp && c > 0 &&
+                  cells[c - 1] == neighbour(w, 0, -1) && c + 1 < C && cells[c + 1] == neighbour(w, 0, 1);
     }
     std::vector<std::uint32_t> piece(inl.size());
     for (std::size_t i = 0; i < inl.size(); ++i) {
@@ -261,6 +280,98 @@ class Structure {
       }
     }
     return std::min(run, cap);
+  }
+
+  // axes[m] for every member m: bit a set when thickness(s, pts_[m], a, thin + 1) <= thin (thin:
+  // max(4, object_gap + 2)), 64 voxels of a row at a time on a bit mask of s over its box.
+  void thin_axes(std::uint32_t s, std::vector<std::uint8_t>& axes) const {
+    switch (p_.object_gap) {
+#define OCCSEG_THIN_AXES(G) \
+  case G:                   \
+    return thin_axes<G>(s, axes);
+      OCCSEG_THIN_AXES(0) OCCSEG_THIN_AXES(1) OCCSEG_THIN_AXES(2) OCCSEG_THIN_AXES(3) OCCSEG_THIN_AXES(4)
+      OCCSEG_THIN_AXES(5) OCCSEG_THIN_AXES(6) OCCSEG_THIN_AXES(7) OCCSEG_THIN_AXES(8) OCCSEG_THIN_AXES(9)
+      OCCSEG_THIN_AXES(10) OCCSEG_THIN_AXES(11) OCCSEG_THIN_AXES(12) OCCSEG_THIN_AXES(13) OCCSEG_THIN_AXES(14)
+      OCCSEG_THIN_AXES(15) OCCSEG_THIN_AXES(16)
+#undef OCCSEG_THIN_AXES
+      default:  // (beyond the parameter's range)
+        break;
+    }
+    const int thin = std::max(4, p_.object_gap + 2);
+    for (std::size_t m = 0; m < members_.size(); ++m)
+      for (int a = 0; a < 3; ++a)
+        if (thickness(s, pts_[m], a, thin + 1) <= thin) axes[m] |= std::uint8_t(1u << a);
+  }
+
+  // Along one direction, with B_j the bits of the voxels j steps on (1 <= j <= thin + G): the walk
+  // of thickness() reaches j steps or more (R_j) exactly when no G + 1 consecutive steps in
+  // 1 .. j + G miss s (a voxel of s among steps j .. j + G is then reached, each gap crossed being
+  // at most G), so R_j = E_1 & ... & E_j with E_t = B_t | ... | B_(t+G). The probe counts
+  // 1 + reach(-) + reach(+), capped at thin + 1: the voxel is thick when R+_P & R-_(thin-P) for
+  // some P in 0 .. thin (R_0: all).
+  template <int G>
+  void thin_axes(std::uint32_t s, std::vector<std::uint8_t>& axes) const {
+    constexpr int T = std::max(4, G + 2), L = T + G;  // thin, and the steps a direction needs
+    static_assert(L < 64, "a row's shifts stay within one word");
+    using W = std::uint64_t;
+    const std::size_t n = members_.size();
+    const Segment& seg = segs_[s];
+    const std::size_t x0 = seg.bbox_min[0], y0 = seg.bbox_min[1], z0 = seg.bbox_min[2];
+    const std::size_t bx = seg.bbox_max[0] - x0 + 1, by = seg.bbox_max[1] - y0 + 1, bz = seg.bbox_max[2] - z0 + 1;
+    const std::size_t wpr = (bx + 63) / 64, layer = by * wpr;  // words per row, per layer
+    std::vector<W> vol(layer * bz, 0);
+    for (std::size_t m = 0; m < n; ++m) {
+      const std::size_t i = members_[m];
+      const std::size_t x = i % d_.nx - x0, y = (i / d_.nx) % d_.ny - y0, z = i / (d_.nx * d_.ny) - z0;
+      vol[z * layer + y * wpr + x / 64] |= W(1) << (x % 64);
+    }
+    const auto reach = [](const W* b, W* r) {  // b[1 .. L] -> r[1 .. T]
+      W all = ~W(0);
+      for (int t = 1; t <= T; ++t) {
+        W e = 0;
+        for (int i = t; i <= t + G; ++i) e |= b[i];
+        r[t] = all &= e;
+      }
+    };
+    const auto thick = [&](const W* bp, const W* bm) {
+      W rp[T + 1], rm[T + 1];
+      reach(bp, rp);
+      reach(bm, rm);
+      W t = rp[T] | rm[T];
+      for (int q = 1; q < T; ++q) t |= rp[q] & rm[T - q];
+      return t;
+    };
+    W bp[L + 1], bm[L + 1];
+    std::size_t m = 0;
+    for (std::size_t z = 0; z < bz; ++z)
+      for (std::size_t y = 0; y < by; ++y) {
+        const W* row = vol.data() + z * layer + y * wpr;
+        for (std::size_t w = 0; w < wpr; ++w) {
+          const W own = row[w];
+          if (!own) continue;
+          W thin_of[3];
+          {  // x: the row's bits shifted, across its words
+            const W next = w + 1 < wpr ? row[w + 1] : 0, prev = w > 0 ? row[w - 1] : 0;
+            for (int k = 1; k <= L; ++k)
+              bp[k] = (own >> k) | (next << (64 - k)), bm[k] = (own << k) | (prev >> (64 - k));
+            thin_of[0] = ~thick(bp, bm);
+          }
+          // y: the rows beside it in its layer; z: the rows above and below it
+          const std::size_t at[2] = {y, z}, lim[2] = {by, bz}, stride[2] = {wpr, layer};
+          for (int a = 0; a < 2; ++a) {
+            for (int k = 1; k <= L; ++k) {
+              const std::size_t o = std::size_t(k) * stride[a];
+              bp[k] = at[a] + std::size_t(k) < lim[a] ? row[o + w] : 0;
+              bm[k] = at[a] >= std::size_t(k) ? *(row - o + w) : 0;
+            }
+            thin_of[1 + a] = ~thick(bp, bm);
+          }
+          for (W bits = own; bits; bits &= bits - 1) {  // the members in scan order
+            const int b = __builtin_ctzll(bits);
+            axes[m++] = std::uint8_t((thin_of[0] >> b & 1) | (thin_of[1] >> b & 1) << 1 | (thin_of[2] >> b & 1) << 2);
+          }
+        }
+      }
   }
 
   // A box around the points within distance t of a piece's plane over its extent widened by w
@@ -369,34 +480,54 @@ class Structure {
     std::vector<std::int32_t> piece_of(n, -1);  // structural piece (index into local) or -1
     std::vector<Piece> local;                   // this segment's pieces of >= min_plane voxels
     std::vector<std::uint8_t> axes(n, 0);
-    for (std::size_t m = 0; m < n; ++m)
-      for (int a = 0; a < 3; ++a)
-        if (thickness(s, pts_[m], a, thin + 1) <= thin) axes[m] |= std::uint8_t(1u << a);
+    thin_axes(s, axes);
+    // The rest: the voxels of the axis no plane holds yet (indices into pts_), and their
+    // coordinates by axis (rx, ry, rz) for the fits, kept in step (compacted after each plane).
     std::vector<std::uint32_t> rest;
-    std::vector<Vec> rpts;
-    std::vector<std::uint32_t> inl, keep, positions;
+    std::vector<double> rx, ry, rz;
+    std::vector<std::uint32_t> inl, positions;
     for (int axis = 2, it = 0; axis >= 0; --axis) {
       rest.clear();
       for (std::size_t m = 0; m < n; ++m)
         if ((axes[m] >> axis & 1) && piece_of[m] < 0) rest.push_back(static_cast<std::uint32_t>(m));
+      rx.resize(rest.size()), ry.resize(rest.size()), rz.resize(rest.size());
+      for (std::size_t r = 0; r < rest.size(); ++r)
+        rx[r] = pts_[rest[r]][0], ry[r] = pts_[rest[r]][1], rz[r] = pts_[rest[r]][2];
       for (int tries = 0; tries < p_.structure_planes && rest.size() >= min_plane_; ++tries, ++it) {
-      rpts.resize(rest.size());
-      for (std::size_t r = 0; r < rest.size(); ++r) rpts[r] = pts_[rest[r]];
       Plane pl;
       std::size_t count = 0;
       const std::uint64_t seed = 0x737472756374ull ^ (std::uint64_t(members_[0]) * 0x9E3779B97F4A7C15ull) ^
                                  (std::uint64_t(it) * 0xD1B54A32D192ED03ull);
-      if (!fit_dominant_plane(rpts, seed, pl, count, 1, k_, axis, &positions) || count < min_plane_) break;
+      const kernels::PlanePoints rp{rx.data(), ry.data(), rz.data(), rest.size()};
+      if (!fit_dominant_plane(rp, seed, pl, count, 1, k_, axis, &positions) || count < min_plane_) break;
       if (std::fabs(pl.n[std::size_t(axis)]) < std::sqrt(0.5)) break;  // (refitted away from the axis)
-      // The plane's inliers among the rest (the fit's, in order), and what stays.
+      // The plane's inliers among the rest (the fit's, in order), and what stays: compacted in
+      // place, the stretches between runs of inliers moved at once.
       inl.clear();
-      keep.clear();
-      for (std::size_t r = 0, i = 0; r < rest.size(); ++r)
-        if (i < positions.size() && positions[i] == r)
-          inl.push_back(rest[r]), ++i;
-        else
-          keep.push_back(rest[r]);
-      rest.swap(keep);
+      std::size_t kept = 0, from = 0;  // rest[from ..) not yet placed
+      const auto move = [&](std::size_t b, std::size_t e) {
+        if (kept != b && e - b < 16) {  // (short stretches: cheaper than four calls of memmove)
+          for (std::size_t r = b; r < e; ++r) {
+            const std::size_t t = kept + (r - b);
+            rest[t] = rest[r], rx[t] = rx[r], ry[t] = ry[r], rz[t] = rz[r];
+          }
+        } else if (kept != b) {
+          std::copy(rest.data() + b, rest.data() + e, rest.data() + kept);
+          std::copy(rx.data() + b, rx.data() + e, rx.data() + kept);
+          std::copy(ry.data() + b, ry.data() + e, ry.data() + kept);
+          std::copy(rz.data() + b, rz.data() + e, rz.data() + kept);
+        }
+        kept += e - b;
+      };
+      for (std::size_t i = 0; i < positions.size();) {
+        const std::size_t p = positions[i];
+        std::size_t q = p;  // the run p .. q - 1 of inliers
+        for (; i < positions.size() && positions[i] == q; ++i, ++q) inl.push_back(rest[q]);
+        move(from, p);
+        from = q;
+      }
+      move(from, rest.size());
+      rest.resize(kept);
       Vec u, v;
       plane_basis(pl.n, u, v);
       std::size_t pieces = 0;
@@ -537,6 +668,38 @@ class Structure {
     // Open sides: from each structural voxel, one to three voxels along +n and -n, the first voxel
     // outside the segment; a side is open when it saw free space at least a quarter as often as
     // the other (a wall between two rooms is open on both).
+    // The voxel t steps along +-n from voxel centre c is round(c + t n) per coordinate; with c an
+    // integer below 2^21 the sum is off by under 1e-9, so when t n is more than 1e-6 from a
+    // half-integer in every coordinate it is c + round(t n): one offset per piece and step
+    // (`shift`), else voxel_at() itself.
+    struct Shift {
+      bool exact = false;
+      long o[3] = {0, 0, 0};
+    };
+    std::vector<std::array<Shift, 6>> shift(P);  // [side * 3 + step - 1]
+    const bool small = d_.nx < (1u << 21) && d_.ny < (1u << 21) && d_.nz < (1u << 21);
+    for (std::size_t q = 0; q < P && small; ++q)
+      for (int side = 0; side < 2; ++side)
+        for (int step = 1; step <= 3; ++step) {
+          Shift& sh = shift[q][std::size_t(side * 3 + step - 1)];
+          sh.exact = true;
+          for (int k = 0; k < 3; ++k) {
+            const double x = (side == 0 ? 1.0 : -1.0) * step * local[q].pl.n[std::size_t(k)];
+            sh.o[k] = long(std::round(x));
+            if (std::fabs(std::fabs(x - std::trunc(x)) - 0.5) <= 1e-6) sh.exact = false;
+          }
+        }
+    const long lim[3] = {long(d_.nx), long(d_.ny), long(d_.nz)};
+    const auto probe = [&](std::size_t m, const Shift& sh, double t, const Vec& nrm, std::size_t& w) {
+      if (!sh.exact) return voxel_at(pts_[m], t, nrm, w);
+      long q[3];
+      for (int k = 0; k < 3; ++k) {
+        q[k] = long(pts_[m][std::size_t(k)]) + sh.o[k];
+        if (q[k] < 0 || q[k] >= lim[k]) return false;
+      }
+      w = g_.index(std::size_t(q[0]), std::size_t(q[1]), std::size_t(q[2]));
+      return true;
+    };
     std::vector<std::array<std::size_t, 2>> seen(P, {0, 0});
     for (std::size_t m = 0; m < n; ++m) {
       if (piece_of[m] < 0) continue;
@@ -544,7 +707,8 @@ class Structure {
       for (int side = 0; side < 2; ++side)
         for (int step = 1; step <= 3; ++step) {
           std::size_t w;
-          if (!voxel_at(pts_[m], (side == 0 ? 1.0 : -1.0) * step, pc.pl.n, w)) break;
+          const Shift& sh = shift[std::size_t(piece_of[m])][std::size_t(side * 3 + step - 1)];
+          if (!probe(m, sh, (side == 0 ? 1.0 : -1.0) * step, pc.pl.n, w)) break;
           if (member(labels_[w])) continue;
           seen[std::size_t(piece_of[m])][std::size_t(side)] += segs_[labels_[w]].state == State::free;
           break;

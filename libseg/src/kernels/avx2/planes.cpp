@@ -6,6 +6,8 @@
 #include <immintrin.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 
 namespace occseg::kernels::avx2 {
 
@@ -81,6 +83,48 @@ __attribute__((target("avx2"))) void planes_cost_pair(const PlanePoints& c, cons
   }
   cost_a = cost_from(c, a, cap, stop, acc_a, i);  // (the last n % 4 points)
   cost_b = cost_from(c, b, cap, stop, acc_b, i);
+}
+
+// Lane k of kCompress[m]: the k-th set bit of the 4-bit mask m (the lanes past its count: 0).
+alignas(16) constexpr std::uint32_t kCompress[16][4] = {
+    {0, 0, 0, 0}, {0, 0, 0, 0}, {1, 0, 0, 0}, {0, 1, 0, 0}, {2, 0, 0, 0}, {0, 2, 0, 0}, {1, 2, 0, 0}, {0, 1, 2, 0},
+    {3, 0, 0, 0}, {0, 3, 0, 0}, {1, 3, 0, 0}, {0, 1, 3, 0}, {2, 3, 0, 0}, {0, 2, 3, 0}, {1, 2, 3, 0}, {0, 1, 2, 3}};
+
+// The four positions of a vector's inliers are stored at once: out[count .. count + 4) is within
+// out[0 .. n) because count <= i and i + 4 <= n.
+__attribute__((target("avx2,popcnt"))) double planes_cost_inliers(const PlanePoints& c, const MsacPlane& pl,
+                                                                   double cap, double stop, double inlier,
+                                                                   std::uint32_t* out, std::size_t& count) {
+  const __m256d n0 = _mm256_set1_pd(pl.n0), n1 = _mm256_set1_pd(pl.n1), n2 = _mm256_set1_pd(pl.n2);
+  const __m256d d = _mm256_set1_pd(pl.d), vcap = _mm256_set1_pd(cap), vin = _mm256_set1_pd(inlier);
+  const __m256d sign = _mm256_set1_pd(-0.0);
+  const std::size_t n = c.n, n4 = n & ~std::size_t(3);
+  __m256d acc = _mm256_setzero_pd();
+  std::size_t k = 0, i = 0;
+  while (i < n4) {
+    for (const std::size_t e = std::min(n4, i + kMsacChunk); i < e; i += 4) {
+      __m256d t =
+          _mm256_add_pd(_mm256_mul_pd(n0, _mm256_loadu_pd(c.x + i)), _mm256_mul_pd(n1, _mm256_loadu_pd(c.y + i)));
+      t = _mm256_sub_pd(_mm256_add_pd(t, _mm256_mul_pd(n2, _mm256_loadu_pd(c.z + i))), d);
+      acc = _mm256_add_pd(acc, _mm256_min_pd(_mm256_mul_pd(t, t), vcap));
+      const int m = _mm256_movemask_pd(_mm256_cmp_pd(_mm256_andnot_pd(sign, t), vin, _CMP_LE_OQ));
+      const __m128i at = _mm_add_epi32(_mm_set1_epi32(static_cast<int>(i)),
+                                       _mm_load_si128(reinterpret_cast<const __m128i*>(kCompress[m])));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(out + k), at);
+      k += static_cast<std::size_t>(__builtin_popcount(static_cast<unsigned>(m)));
+    }
+    if (lane_sum(acc) >= stop) return lane_sum(acc);
+  }
+  double l[4];
+  _mm256_storeu_pd(l, acc);
+  for (; i < n; ++i) {
+    const double e = pl.n0 * c.x[i] + pl.n1 * c.y[i] + pl.n2 * c.z[i] - pl.d;
+    l[i % 4] += std::min(e * e, cap);
+    out[k] = static_cast<std::uint32_t>(i);
+    k += std::fabs(e) <= inlier;
+  }
+  count = k;
+  return (l[0] + l[1]) + (l[2] + l[3]);
 }
 
 __attribute__((target("avx2,popcnt"))) std::size_t planes_row_members(const std::uint32_t* row, std::size_t x0,
