@@ -52,6 +52,7 @@ struct Piece {
   std::array<std::uint32_t, 3> lo{}, hi{};  // box of its voxels
   std::size_t voxels = 0;
   std::uint64_t voxel = 0;  // its first inlier (a voxel index)
+  int axis = 2;  // the orientation it was searched in (examine()): its normal is within 45 degrees of it
   bool structural = false;
   double min_height = 0;      // max(kMinObjectHeight, kNoiseHeights x sigma)
   bool open[2] = {false, false};  // along +n, -n: the side sees free space
@@ -419,13 +420,22 @@ class Structure {
   }
 
   // Robust spread of a plane's surface: 1.4826 x the median |distance| of the segment's voxels
-  // within 4 voxel edges of it and over the piece's extent (as rules/planes.cpp).
-  double surface_sigma(const Piece& pc) const {
+  // within 4 voxel edges of it and over the piece's extent (as rules/planes.cpp) that can be the
+  // surface's own voxels or its noise: thin along the piece's axis (`axes`, examine()) and of no
+  // other structural piece (`piece_of`; this one is `self`). What meets or stands on the surface
+  // within the band (the feet of a building's walls and furniture on its floor, the floor and
+  // ceiling along a wall's foot and head) is thick along that axis, and another structural piece
+  // parallel within the band (the floor under a layer of its noise found as a piece of its own)
+  // is another surface: counted, they inflate the spread and so the height an object must rise
+  // (split()).
+  double surface_sigma(const Piece& pc, std::int32_t self, const std::vector<std::uint8_t>& axes,
+                       const std::vector<std::int32_t>& piece_of) const {
     std::vector<double> near;
     const Box box = band_box(pc, 4.0, 0.0);
     for (std::size_t i = box.i0; i < box.i1; ++i) {
       const Vec& q = pts_[box.at(i)];
-      if (!box.holds(q)) continue;
+      const std::size_t m = box.at(i);
+      if (!box.holds(q) || !(axes[m] >> pc.axis & 1) || (piece_of[m] >= 0 && piece_of[m] != self)) continue;
       const double e = std::fabs(pc.pl.distance(q[0], q[1], q[2]));
       if (e > 4.0) continue;
       const double a = dot(q, pc.u), b = dot(q, pc.v);
@@ -572,7 +582,7 @@ class Structure {
       for (std::size_t q = 0; q < pieces; ++q) {
         Piece& pc = found[q];
         if (pc.voxels < min_plane_) continue;
-        pc.segment = s, pc.pl = pl;
+        pc.segment = s, pc.pl = pl, pc.axis = axis;
         // Structural: wide both ways, an area (at least a quarter of its cells inner ones), and flat.
         pc.structural = pc.u1 - pc.u0 + 1 >= extent_ && pc.v1 - pc.v0 + 1 >= extent_ && 4 * inner[q] >= cells_of[q];
         if (pc.structural) curved[q] = 1;  // decided below
@@ -650,11 +660,45 @@ class Structure {
       return;
     }
     segs_[s].kind = Kind::structure;
-    split(s, local, piece_of);
+    split(s, local, piece_of, axes);
+  }
+
+  // The noise of a structural surface is structure: a voxel still of s (no piece's) within half
+  // the height an object must rise from a structural piece's plane, over its extent widened by a
+  // cell, whose run of voxels still of s along the piece's axis (thickness(), crossing gaps of at
+  // most object_gap) fits in that band, takes the piece's temporary label (the first such piece
+  // in order; all decided before any is taken). Under range noise a building's floor has a layer
+  // of voxels just above its inliers, which would otherwise join the feet of the furniture
+  // standing on it to each other and to the walls; what stands on the floor (a leg, a box's side)
+  // runs on above the band and stays.
+  void claim_noise(std::uint32_t s, const std::vector<Piece>& local) {
+    const std::size_t n = members_.size();
+    std::vector<std::int32_t> take(n, -1);
+    const double w = cell_;
+    for (std::size_t q = 0; q < local.size(); ++q) {
+      const Piece& pc = local[q];
+      if (!pc.structural) continue;
+      const double t = 0.5 * pc.min_height;
+      const int fits = static_cast<int>(std::floor(2 * t));
+      const Box box = band_box(pc, t, w);
+      for (std::size_t i = box.i0; i < box.i1; ++i) {
+        const std::size_t m = box.at(i);
+        if (take[m] >= 0 || labels_[members_[m]] != s) continue;
+        const Vec& x = pts_[m];
+        if (!box.holds(x) || std::fabs(pc.pl.distance(x[0], x[1], x[2])) > t) continue;
+        const double a = dot(x, pc.u), b = dot(x, pc.v);
+        if (a < pc.u0 - w || a > pc.u1 + w || b < pc.v0 - w || b > pc.v1 + w) continue;
+        if (thickness(s, x, pc.axis, fits + 1) > fits) continue;
+        take[m] = static_cast<std::int32_t>(q);
+      }
+    }
+    for (std::size_t m = 0; m < n; ++m)
+      if (take[m] >= 0) labels_[members_[m]] = kTop - static_cast<std::uint32_t>(take[m]);
   }
 
   // Temporary labels, above every id: structural pieces kTop - q, remainder components below them.
-  void split(std::uint32_t s, std::vector<Piece>& local, const std::vector<std::int32_t>& piece_of) {
+  void split(std::uint32_t s, std::vector<Piece>& local, const std::vector<std::int32_t>& piece_of,
+             const std::vector<std::uint8_t>& axes) {
     const std::size_t n = members_.size(), P = local.size();
     for (std::size_t m = 0; m < n; ++m)
       if (piece_of[m] >= 0) labels_[members_[m]] = kTop - static_cast<std::uint32_t>(piece_of[m]);
@@ -663,8 +707,9 @@ class Structure {
     for (std::size_t q = 0; q < P; ++q) {
       Piece& pc = local[q];
       if (!pc.structural) continue;
-      pc.min_height = std::max(kMinObjectHeight, kNoiseHeights * surface_sigma(pc));
+      pc.min_height = std::max(kMinObjectHeight, kNoiseHeights * surface_sigma(pc, std::int32_t(q), axes, piece_of));
     }
+    claim_noise(s, local);
     // Open sides: from each structural voxel, one to three voxels along +n and -n, the first voxel
     // outside the segment; a side is open when it saw free space at least a quarter as often as
     // the other (a wall between two rooms is open on both).

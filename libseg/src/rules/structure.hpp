@@ -42,7 +42,10 @@ struct PlanePiece {
 // params.structure_extent metres along both of its principal axes, is an area (a quarter of its
 // cells have all four in-plane neighbours) and is flat (a quadratic fit of its distances sags by
 // under half a voxel edge). Unclaimed voxels on a structural piece's plane over its extent
-// (widened by a cell) join it. A segment with a structural piece becomes `structure`: the
+// (widened by a cell) join it. sigma is a structural piece's noise: the robust spread of the
+// voxels near its plane that are thin along its axis and of no other structural piece; the
+// voxels of no piece within max(3, 5 sigma) / 2 of it whose run along its axis fits in that band
+// are that noise and join it too. A segment with a structural piece becomes `structure`: the
 // connected components (occupied_connectivity) of its other voxels become objects (new segments,
 // numbered after all others in the order of their first voxel) when they have at least
 // max(27, min_object_voxels) voxels, touch a structural piece, lie flat on none (within
