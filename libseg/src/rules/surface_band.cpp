@@ -72,25 +72,33 @@ void x_eroded(const std::uint64_t* in, word_t* out, std::size_t W, std::uint64_t
   }
 }
 
-// Row q = (y, z) of one face step of `in` (the row's voxels and their 6 face neighbours, within
-// the map) into `out`.
-inline void face_step_row(const Layout& L, const word_t* in, word_t* out, std::size_t y, std::size_t z) {
-  const std::size_t W = L.W, q = y + L.ny * z;
-  const word_t* const c = in + q * W;
-  word_t* const o = out + q * W;
-  for (std::size_t i = 0; i < W; ++i) {
-    const std::uint64_t prev = i > 0 ? c[i - 1] : 0, next = i + 1 < W ? c[i + 1] : 0;
-    const std::uint64_t v = c[i] | (c[i] << 1) | (prev >> 63) | (c[i] >> 1) | (next << 63);
-    o[i] = i + 1 == W ? v & L.tail : v;
+// Rows [y0, y1) of plane z of one face step of `in` (the voxels and their 6 face neighbours,
+// within the map) into `out`: along x row by row, then the rows y +- 1 and planes z +- 1 as flat
+// loops over the run's words.
+inline void face_step_rows(const Layout& L, const word_t* in, word_t* out, std::size_t y0, std::size_t y1,
+                           std::size_t z) {
+  const std::size_t W = L.W, P = L.P, ny = L.ny;
+  const std::uint64_t tail = L.tail;
+  for (std::size_t y = y0; y < y1; ++y) {
+    const word_t* const c = in + (y + ny * z) * W;
+    word_t* const o = out + (y + ny * z) * W;
+    for (std::size_t i = 0; i < W; ++i) {
+      const std::uint64_t prev = i > 0 ? c[i - 1] : 0, next = i + 1 < W ? c[i + 1] : 0;
+      const std::uint64_t v = c[i] | (c[i] << 1) | (prev >> 63) | (c[i] >> 1) | (next << 63);
+      o[i] = i + 1 == W ? v & tail : v;
+    }
   }
-  if (y > 0)
-    for (std::size_t i = 0; i < W; ++i) o[i] |= (c - W)[i];
-  if (y + 1 < L.ny)
-    for (std::size_t i = 0; i < W; ++i) o[i] |= c[W + i];
-  if (z > 0)
-    for (std::size_t i = 0; i < W; ++i) o[i] |= (c - L.P)[i];
+  const std::size_t b = (y0 + ny * z) * W, e = (y1 + ny * z) * W;  // the run's words
+  word_t* const o = out;
+  // y - 1 (rows y0 > 0 or later) and y + 1 (rows up to ny - 2)
+  for (std::size_t i = std::max(b, (ny * z + 1) * W); i < e; ++i) o[i] |= in[i - W];
+  for (std::size_t i = b, ee = std::min(e, (ny * z + ny - 1) * W); i < ee; ++i) o[i] |= in[i + W];
+  if (z > 0) {
+    const word_t* const below = in + b - P;  // (in[i - P] would wrap the unsigned index at z = 0)
+    for (std::size_t i = 0; i < e - b; ++i) o[b + i] |= below[i];
+  }
   if (z + 1 < L.nz)
-    for (std::size_t i = 0; i < W; ++i) o[i] |= c[L.P + i];
+    for (std::size_t i = b; i < e; ++i) o[i] |= in[i + P];
 }
 
 std::vector<std::uint8_t> kinds_within(const Layout& L, const std::uint8_t* kinds, int r);
@@ -110,8 +118,16 @@ const word_t* reach_rows(const Layout& L, const word_t* src, const std::vector<s
     const std::uint8_t* const flags = need[static_cast<std::size_t>(j)].data();
     parallel_for(L.nz, threads, [&](std::size_t z0, std::size_t z1) {
       for (std::size_t z = z0; z < z1; ++z)
-        for (std::size_t y = 0; y < L.ny; ++y)
-          if (flags[y + L.ny * z]) face_step_row(L, in, out, y, z);
+        for (std::size_t y = 0; y < L.ny;) {  // runs of flagged rows
+          if (!flags[y + L.ny * z]) {
+            ++y;
+            continue;
+          }
+          std::size_t y1 = y + 1;
+          while (y1 < L.ny && flags[y1 + L.ny * z]) ++y1;
+          face_step_rows(L, in, out, y, y1, z);
+          y = y1;
+        }
     });
     in = out;
   }
