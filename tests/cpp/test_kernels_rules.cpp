@@ -48,20 +48,36 @@ TEST(KernelsRules, RulesRowAtEveryLevelIsTheScalarOne) {
     const kernels::RulesKernels& k = kernels::active().rules;
     const kernels::RulesKernels& s = kernels::table(kernels::Isa::scalar).rules;
     for (std::size_t n : lengths())
-      for (double density : {0.0, 0.3, 0.7, 1.0}) {
+      for (double density : {0.0, 0.02, 0.3, 0.7, 1.0}) {  // (0, 0.02: words of known voxels only)
         // own states: unknown (u), occupied (o) never both
         auto u = bits(r, n, density), o = bits(r, n, 0.5);
         for (std::size_t i = 0; i < u.size(); ++i) o[i] &= ~u[i];
         const auto reg = bits(r, n, density < 1.0 ? 0.3 : 1.0), t = bits(r, n, density, /*past=*/true);
         std::vector<std::uint8_t> st(n);
         for (auto& v : st) v = static_cast<std::uint8_t>(r.below(3));
-        auto want = st;
+        auto want = st, plain = st;
         const std::size_t first = static_cast<std::size_t>(r.below(1000)) * 64 + 5;
-        std::vector<std::size_t> seeds{7}, want_seeds{7};  // (appended to)
-        k.rules_row(st.data(), words(u), words(o), words(reg), words(t), n, first, seeds);
-        s.rules_row(want.data(), words(u), words(o), words(reg), words(t), n, first, want_seeds);
+        std::vector<std::size_t> seeds{7}, want_seeds{7}, plain_seeds{7};  // (appended to)
+        // The result's bit rows, over words holding garbage: every word of the row is written.
+        const std::size_t W = (n + 63) / 64;
+        std::vector<std::uint64_t> f(W + 1, ~0ull), un(W + 1, 0x5555555555555555ull), oc(W + 1, ~0ull);
+        const auto out = [](std::vector<std::uint64_t>& v) { return reinterpret_cast<detail::word_t*>(v.data()); };
+        k.rules_row(st.data(), words(u), words(o), words(reg), words(t), n, first, seeds, out(f), out(un), out(oc));
+        s.rules_row(want.data(), words(u), words(o), words(reg), words(t), n, first, want_seeds, nullptr, nullptr,
+                    nullptr);
+        k.rules_row(plain.data(), words(u), words(o), words(reg), words(t), n, first, plain_seeds, nullptr, nullptr,
+                    nullptr);
         ASSERT_EQ(st, want) << n << " density " << density;
         ASSERT_EQ(seeds, want_seeds) << n << " density " << density;
+        ASSERT_EQ(plain, want) << n << " density " << density;
+        ASSERT_EQ(plain_seeds, want_seeds) << n << " density " << density;
+        for (std::size_t x = 0; x < 64 * W; ++x) {
+          const bool in = x < n;
+          ASSERT_EQ(bit(f, x), in && st[x] == rules::kFree) << n << " voxel " << x;
+          ASSERT_EQ(bit(un, x), in && st[x] == rules::kUnknown) << n << " voxel " << x;
+          ASSERT_EQ(bit(oc, x), in && st[x] == rules::kOccupied) << n << " voxel " << x;
+        }
+        ASSERT_EQ(f[W], ~0ull);  // (nothing past the row's words)
         seeds_seen += seeds.size() - 1;
       }
   });
@@ -86,7 +102,7 @@ TEST(KernelsRules, ScalarRulesRowIsTheVoxelRules) {
     }
     std::vector<std::uint8_t> st(n, state);
     std::vector<std::size_t> seeds;
-    s.rules_row(st.data(), words(u), words(o), words(reg), words(t), n, 0, seeds);
+    s.rules_row(st.data(), words(u), words(o), words(reg), words(t), n, 0, seeds, nullptr, nullptr, nullptr);
     const std::uint8_t want = rules::voxel_rule(state, own, region, touches);
     EXPECT_EQ(st, std::vector<std::uint8_t>(n, want)) << combo;
     EXPECT_EQ(seeds.size(), rules::gap_seed(own, region, touches, want) ? n : 0u) << combo;

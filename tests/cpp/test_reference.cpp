@@ -467,6 +467,28 @@ TEST(Reference, VoxelRulesMatchOnRandomStates) {
           detail::apply_voxel_rules(got.data(), bits.bits, d, p, nullptr, 0, kernels::active());
           EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " kernels "
                                << kernels::isa_name(level) << " threads " << threads;
+          {  // the same with the resulting states' bits for the surface band (over garbage)
+            const std::size_t W = (d.nx + 63) / 64, rows = d.ny * d.nz;
+            std::vector<std::uint64_t> storage(3 * rows * W, 0xA5A5A5A5A5A5A5A5ull);
+            std::vector<std::uint8_t> kinds(rows, 0);
+            detail::StateBits sb;
+            got = st;
+            detail::apply_voxel_rules(got.data(), bits.bits, d, p, nullptr, 0, kernels::active(), &sb, storage.data(),
+                                      kinds.data());
+            ASSERT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " with bits";
+            for (std::size_t row = 0; row < rows; ++row)
+              for (std::size_t x = 0; x < 64 * W; ++x) {
+                const std::size_t w = row * W + x / 64;
+                const bool in = x < d.nx;
+                const std::uint8_t s = in ? got[row * d.nx + x] : 3;
+                ASSERT_EQ((sb.free[w] >> (x % 64)) & 1u, s == 0 ? 1u : 0u) << row << " " << x;
+                ASSERT_EQ((sb.unknown[w] >> (x % 64)) & 1u, s == 1 ? 1u : 0u) << row << " " << x;
+                ASSERT_EQ((sb.occupied[w] >> (x % 64)) & 1u, s == 2 ? 1u : 0u) << row << " " << x;
+                if (in) {
+                  ASSERT_TRUE(sb.rows[row] & (1u << s)) << row << " " << x;  // (kinds: a superset)
+                }
+              }
+          }
           got = st;  // the public stage: own states as bytes
           apply_voxel_rules(got, own, d, p);
           EXPECT_EQ(got, want) << d.nx << "x" << d.ny << "x" << d.nz << " round " << round << " from bytes";

@@ -230,9 +230,27 @@ Result segment_into(const Grid& input, const Params& requested, bool keep_stages
   detail::refine(states.data(), own, grid.dims, params, scratch, room, &growth, k);
   std::vector<std::uint64_t> band;  // the voxels the surface band made occupied, for rule 7's sizes
   if (params.preset == Preset::default_preset) {
-    detail::apply_voxel_rules(states.data(), own, grid.dims, params, scratch, room, k);
-    apply_surface_band(states.data(), grid.dims, params, scratch, room, params.min_object_voxels > 0 ? &band : nullptr,
-                       k);
+    // The rules leave the states' bits for the band (no second reading of the states): in the
+    // scratch's first part, the region mask then the band's masks after them.
+    const std::size_t state_bytes = 3 * bit_words * sizeof(std::uint64_t);
+    std::vector<std::uint8_t> row_kinds(grid.dims.ny * grid.dims.nz);
+    std::vector<std::uint64_t> own_state_bits;
+    std::uint64_t* state_storage;
+    std::uint8_t* rest = scratch;
+    std::size_t rest_bytes = room;
+    if (room >= state_bytes) {
+      state_storage = reinterpret_cast<std::uint64_t*>(scratch);
+      rest = scratch + state_bytes;
+      rest_bytes = room - state_bytes;
+    } else {
+      own_state_bits.resize(3 * bit_words);
+      state_storage = own_state_bits.data();
+    }
+    detail::StateBits bits;
+    detail::apply_voxel_rules(states.data(), own, grid.dims, params, rest, rest_bytes, k, &bits, state_storage,
+                              row_kinds.data());
+    detail::apply_surface_band(states.data(), bits, grid.dims, params, rest, rest_bytes,
+                               params.min_object_voxels > 0 ? &band : nullptr);
   }
   if (!workspace) {  // not at the labelling's peak
     local.unknown_bits = std::vector<std::uint64_t>();

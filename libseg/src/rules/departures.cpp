@@ -51,17 +51,27 @@ struct BitMask {
 // 0) of radius r, from `in` to `out`: windows of 2r + 1 voxels clipped by the map. Along x, rows
 // [r0, r1). Each word is shifted against the words before and after it, which the loop carries
 // along in registers (not reloaded, with a test for the row's ends, at every shift).
-template <bool Erode>
+template <bool Erode, unsigned Fixed>
 void box_x_rows(const BitMask& in, BitMask& out, std::size_t r0, std::size_t r1, int r) {
   const std::size_t W = in.W;
   const std::uint64_t tail = in.tail();
   // Erosion: the bits past nx count as 1 while shifting, then go back to 0.
   const std::uint64_t pad = Erode ? ~tail : 0, outside = Erode ? ~std::uint64_t(0) : 0;
-  // Radii of 64 or more never occur (gap_radius <= 16), so k < 64.
-  const unsigned K = static_cast<unsigned>(std::min<std::size_t>(static_cast<std::size_t>(r), in.nx - 1));
+  // Radii of 64 or more never occur (gap_radius <= 16), so k < 64. (Fixed: the radius known when
+  // compiling, for the default's 1.)
+  const unsigned K =
+      Fixed ? Fixed : static_cast<unsigned>(std::min<std::size_t>(static_cast<std::size_t>(r), in.nx - 1));
   for (std::size_t rw = r0; rw < r1; ++rw) {
     const word_t* a = in.row(rw);
     word_t* o = out.row(rw);
+    // An empty row stays empty (erosion too: its bits past nx never reach a voxel's bit alone),
+    // and is most of the rows of a mask of regions.
+    std::uint64_t any = 0;
+    for (std::size_t i = 0; i < W; ++i) any |= a[i];
+    if (!any) {
+      for (std::size_t i = 0; i < W; ++i) o[i] = 0;
+      continue;
+    }
     std::uint64_t prev = outside, cur = W == 1 ? a[0] | pad : a[0];
     for (std::size_t i = 0; i < W; ++i) {
       const std::uint64_t next = i + 1 < W ? (i + 2 == W ? a[i + 1] | pad : a[i + 1]) : outside;
@@ -78,8 +88,10 @@ void box_x_rows(const BitMask& in, BitMask& out, std::size_t r0, std::size_t r1,
 }
 
 void box_x(const BitMask& in, BitMask& out, std::size_t r0, std::size_t r1, int r, bool erode) {
-  if (erode) box_x_rows<true>(in, out, r0, r1, r);
-  else box_x_rows<false>(in, out, r0, r1, r);
+  // (r = 1 with nx = 1 is K = 0 at run time: the general loop.)
+  const bool one = r == 1 && in.nx > 1;
+  if (erode) one ? box_x_rows<true, 1>(in, out, r0, r1, r) : box_x_rows<true, 0>(in, out, r0, r1, r);
+  else one ? box_x_rows<false, 1>(in, out, r0, r1, r) : box_x_rows<false, 0>(in, out, r0, r1, r);
 }
 
 // One axis of the box erosion or dilation along y, for every row of one plane (ny rows of W
@@ -87,6 +99,16 @@ void box_x(const BitMask& in, BitMask& out, std::size_t r0, std::size_t r1, int 
 // by the plane (the same windows as box_x's, and as the z pass's over planes).
 void box_y_plane(const word_t* in, word_t* out, std::size_t ny, std::size_t W, int r, bool erode) {
   const std::size_t P = ny * W;
+  if (r == 1 && ny >= 2) {  // the default: one pass, rows y - 1, y, y + 1 at once (no copy first)
+    const auto op = [erode](std::uint64_t a, std::uint64_t b) { return erode ? a & b : a | b; };
+    for (std::size_t i = 0; i < W; ++i) out[i] = op(in[i], in[i + W]);
+    if (erode)
+      for (std::size_t i = W; i + W < P; ++i) out[i] = in[i - W] & in[i] & in[i + W];
+    else
+      for (std::size_t i = W; i + W < P; ++i) out[i] = in[i - W] | in[i] | in[i + W];
+    for (std::size_t i = P - W; i < P; ++i) out[i] = op(in[i - W], in[i]);
+    return;
+  }
   std::copy(in, in + P, out);
   for (std::size_t k = 1; k <= static_cast<std::size_t>(r) && k < ny; ++k) {
     const std::size_t off = k * W;  // out[y] with in[y + k] (y + k < ny), then with in[y - k] (y >= k)
@@ -155,6 +177,14 @@ BitMask region_bits(const detail::OwnBits& own, const Dims& d, const Params& par
     // Planes z of the union (or intersection) of ring planes [a, b] into `to`.
     const auto combine = [&](std::vector<std::uint64_t>& v, std::size_t a, std::size_t b, BitMask& to, bool erode) {
       const word_t* first = ring(v, a).w;
+      if (b == a + 2) {  // three planes (the default's r = 1 inside the map): one pass, no copy
+        const word_t *p1 = ring(v, a + 1).w, *p2 = ring(v, a + 2).w;
+        if (erode)
+          for (std::size_t i = 0; i < P; ++i) to.w[i] = first[i] & p1[i] & p2[i];
+        else
+          for (std::size_t i = 0; i < P; ++i) to.w[i] = first[i] | p1[i] | p2[i];
+        return;
+      }
       std::copy(first, first + P, to.w);
       for (std::size_t z = a + 1; z <= b; ++z) {
         const word_t* src = ring(v, z).w;
@@ -212,8 +242,11 @@ namespace {
 // be labelled free everywhere but along its rim. `queue` holds the seeds (gap voxels left unknown
 // that touch an occupied voxel), in any order: the result is a set (connected components), so it
 // does not depend on visiting order.
+// With `sb` (then `sf`, `su` its writable masks, `kinds` its row kinds), the voxels made unknown
+// move from the free mask to the unknown one.
 void flood_gaps_from_objects(std::uint8_t* st, const detail::OwnBits& own, const BitMask& region, const Dims& d,
-                             std::vector<std::size_t>& queue) {
+                             std::vector<std::size_t>& queue, word_t* sf = nullptr, word_t* su = nullptr,
+                             std::uint8_t* kinds = nullptr) {
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, sz = nx * ny;
   auto gap = [&](std::size_t i) { return own.at(i / nx, i % nx) == kUnknown && !bit(region, i / nx, i % nx); };
   while (!queue.empty()) {
@@ -224,6 +257,12 @@ void flood_gaps_from_objects(std::uint8_t* st, const detail::OwnBits& own, const
       if (st[j] == kFree && gap(j)) {
         st[j] = kUnknown;
         queue.push_back(j);
+        if (sf) {
+          const std::size_t row = j / nx, x = j % nx, w = row * own.words + x / 64;
+          sf[w] &= ~(std::uint64_t(1) << (x % 64));
+          su[w] |= std::uint64_t(1) << (x % 64);
+          kinds[row] |= detail::StateBits::kUnknown;  // (kFree may stay: a superset)
+        }
       }
     };
     if (x > 0) visit(i - 1);
@@ -238,9 +277,13 @@ void flood_gaps_from_objects(std::uint8_t* st, const detail::OwnBits& own, const
 }  // namespace
 
 void detail::apply_voxel_rules(std::uint8_t* st, const OwnBits& own, const Dims& d, const Params& params,
-                               std::uint8_t* scratch, std::size_t scratch_bytes, const kernels::Table& k) {
+                               std::uint8_t* scratch, std::size_t scratch_bytes, const kernels::Table& k,
+                               StateBits* bits, std::uint64_t* bit_storage, std::uint8_t* row_kinds) {
   const BitMask region = region_bits(own, d, params, scratch, scratch_bytes);
-  const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, W = own.words;
+  const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, W = own.words, n = ny * nz * W;
+  word_t* const sf = bits ? reinterpret_cast<word_t*>(bit_storage) : nullptr;
+  word_t* const su = bits ? sf + n : nullptr;
+  word_t* const so = bits ? sf + 2 * n : nullptr;
   const std::vector<std::uint64_t> none(W, 0);  // outside the map: no occupied neighbour
   // Reads only own states and each voxel's own entry of st, so rows are independent. The seeds of
   // the gap flood are gathered on the way, slab by slab.
@@ -257,14 +300,24 @@ void detail::apply_voxel_rules(std::uint8_t* st, const OwnBits& own, const Dims&
         const auto* const u = reinterpret_cast<const word_t*>(own.unknown) + r * W;
         const auto* const o = reinterpret_cast<const word_t*>(own.occupied) + r * W;
         const auto* const out = reinterpret_cast<const word_t*>(none.data());
-        touching_bits(o, y > 0 ? o - W : out, y + 1 < ny ? o + W : out, z > 0 ? o - ny * W : out,
-                      z + 1 < nz ? o + ny * W : out, W, touching.data());
-        kr.rules_row(st + i, u, o, region.row(r), t, nx, i, mine);
+        // The touching bits matter only for voxels at 0.5 (rule 3): a row without one skips them.
+        std::uint64_t any_half = 0;
+        for (std::size_t w = 0; w < W; ++w) any_half |= u[w];
+        if (any_half)
+          touching_bits(o, y > 0 ? o - W : out, y + 1 < ny ? o + W : out, z > 0 ? o - ny * W : out,
+                        z + 1 < nz ? o + ny * W : out, W, touching.data());
+        if (sf) {
+          kr.rules_row(st + i, u, o, region.row(r), t, nx, i, mine, sf + r * W, su + r * W, so + r * W);
+          row_kinds[r] = detail::row_kinds(sf + r * W, su + r * W, so + r * W, W);
+        } else {
+          kr.rules_row(st + i, u, o, region.row(r), t, nx, i, mine, nullptr, nullptr, nullptr);
+        }
       }
     std::lock_guard<std::mutex> lock(seeds_mutex);
     seeds.insert(seeds.end(), mine.begin(), mine.end());
   });
-  flood_gaps_from_objects(st, own, region, d, seeds);
+  flood_gaps_from_objects(st, own, region, d, seeds, sf, su, row_kinds);
+  if (bits) *bits = StateBits{sf, su, so, W, row_kinds};
 }
 
 void apply_voxel_rules(std::vector<std::uint8_t>& st, const std::vector<std::uint8_t>& own, const Dims& d,

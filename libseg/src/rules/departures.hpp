@@ -8,6 +8,7 @@
 #include "kernels/kernels.hpp"
 #include "occseg/grid.hpp"
 #include "occseg/params.hpp"
+#include "rules/state_bits.hpp"
 #include "stages/own_states.hpp"
 
 namespace occseg {
@@ -38,9 +39,13 @@ void apply_voxel_rules(std::vector<std::uint8_t>& states, const std::vector<std:
 
 namespace detail {
 // apply_voxel_rules() with the own states as bits; `scratch` (8-byte aligned, or nullptr) holds
-// the regions' bit mask if it has room.
+// the regions' bit mask if it has room. With `bits`, also the resulting states as StateBits, made
+// on the way (the rules write every voxel's state): their masks in `bit_storage` (3 * ny * nz *
+// ceil(nx / 64) words, apart from scratch), their row kinds in `row_kinds` (ny * nz bytes).
 void apply_voxel_rules(std::uint8_t* states, const OwnBits& own, const Dims& dims, const Params& params,
-                       std::uint8_t* scratch, std::size_t scratch_bytes, const kernels::Table& k);
+                       std::uint8_t* scratch, std::size_t scratch_bytes, const kernels::Table& k,
+                       StateBits* bits = nullptr, std::uint64_t* bit_storage = nullptr,
+                       std::uint8_t* row_kinds = nullptr);
 }  // namespace detail
 
 }  // namespace occseg

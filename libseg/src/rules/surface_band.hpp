@@ -9,6 +9,7 @@
 #include "kernels/kernels.hpp"
 #include "occseg/grid.hpp"
 #include "occseg/params.hpp"
+#include "rules/state_bits.hpp"
 
 namespace occseg {
 
@@ -27,7 +28,7 @@ namespace occseg {
 // makes another one thin). Only free voxels change, and only to occupied: a voxel whose own
 // probability is occupied is never made free, an unknown voxel never changes. Rows are
 // independent: the result never depends on `params.threads`. `scratch` (8-byte aligned, or
-// nullptr) holds the rule's four bit masks if it has room (scratch_bytes). `added` (if given)
+// nullptr) holds the rule's seven bit masks if it has room (scratch_bytes). `added` (if given)
 // receives the voxels made occupied as a bit mask (ceil(nx / 64) words per row of voxels).
 void apply_surface_band(std::uint8_t* states, const Dims& dims, const Params& params, std::uint8_t* scratch = nullptr,
                         std::size_t scratch_bytes = 0, std::vector<std::uint64_t>* added = nullptr,
@@ -42,7 +43,23 @@ inline void apply_surface_band(std::vector<std::uint8_t>& states, const Dims& di
 std::vector<std::uint64_t> surface_band_voxels(const std::vector<std::uint64_t>& added, const Dims& dims,
                                                const std::uint32_t* labels, std::size_t segments);
 
-// The bytes of scratch the rule uses on a map of `dims` (four bit masks).
+// The bytes of scratch the rule uses on a map of `dims` (seven bit masks).
 std::size_t surface_band_scratch_bytes(const Dims& dims);
+
+namespace detail {
+
+// StateBits of `states`, its masks in `storage` (3 * ny * nz * words words), its row kinds in
+// `rows` (ny * nz bytes).
+void state_bits(const std::uint8_t* states, const Dims& dims, int threads, std::uint64_t* storage, std::uint8_t* rows,
+                StateBits& out, const kernels::Table& k = kernels::active());
+
+// apply_surface_band() with the states' bits already made (they must be those of `states`, and
+// are not updated); `scratch` (8-byte aligned, or nullptr) holds its four masks if it has room
+// (surface_band_rows_scratch_bytes).
+void apply_surface_band(std::uint8_t* states, const StateBits& bits, const Dims& dims, const Params& params,
+                        std::uint8_t* scratch, std::size_t scratch_bytes, std::vector<std::uint64_t>* added);
+std::size_t surface_band_rows_scratch_bytes(const Dims& dims);
+
+}  // namespace detail
 
 }  // namespace occseg

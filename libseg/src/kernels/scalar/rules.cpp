@@ -4,8 +4,8 @@
 namespace occseg::kernels::scalar {
 
 void rules_row(std::uint8_t* st, const word_t* u, const word_t* o, const word_t* reg, const word_t* t, std::size_t n,
-               std::size_t first, std::vector<std::size_t>& seeds) {
-  generic::rules_row(st, u, o, reg, t, n, first, seeds);
+               std::size_t first, std::vector<std::size_t>& seeds, word_t* f, word_t* un, word_t* oc) {
+  generic::rules_row(st, u, o, reg, t, n, first, seeds, f, un, oc);
 }
 
 void unpack_half(const word_t* bits, const std::uint8_t* own, std::size_t nx, std::uint8_t* out) {
