@@ -168,9 +168,20 @@ class StartsBack {
 // The run_sum kernel's sum (kernels/label.hpp: lane k % 8 from 0.0, the lanes added pairwise) of
 // a run shorter than a lane's turn, inline: most runs of a noisy map are that short, and the
 // kernel's call and vector set-up cost more than their few additions.
+// (n < 8: voxel k is lane k's only value, added to 0.0; a switch that falls through keeps the
+// lanes in registers, where a loop of variable length kept them in memory.)
 inline double short_run_sum(const float* v, std::size_t n) {
   double l[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-  for (std::size_t k = 0; k < n; ++k) l[k] += v[k];
+  switch (n) {
+    case 7: l[6] = 0.0 + v[6]; [[fallthrough]];
+    case 6: l[5] = 0.0 + v[5]; [[fallthrough]];
+    case 5: l[4] = 0.0 + v[4]; [[fallthrough]];
+    case 4: l[3] = 0.0 + v[3]; [[fallthrough]];
+    case 3: l[2] = 0.0 + v[2]; [[fallthrough]];
+    case 2: l[1] = 0.0 + v[1]; [[fallthrough]];
+    case 1: l[0] = 0.0 + v[0]; [[fallthrough]];
+    default: break;
+  }
   return ((l[0] + l[1]) + (l[2] + l[3])) + ((l[4] + l[5]) + (l[6] + l[7]));
 }
 
