@@ -327,3 +327,40 @@ TEST(Components, ReusedRunStartStorageIsClearedFirst) {
   for (std::size_t k = 0; k < want_segs.size(); ++k) EXPECT_EQ(got_segs[k].voxels, want_segs[k].voxels) << k;
   EXPECT_EQ(run_starts.data(), storage);
 }
+
+// A comb: five free teeth (x even) through slabs 0 and 1, joined only by a free bar filling slab 2
+// (z >= 16), four occupied columns (x odd, z < 16) between them. Slab 1 holds five local
+// components of the free segment, whose root is in slab 0: the statistics take the five as one
+// segment of the slab (hand-counted sums; values constant per state, so the means are exact).
+TEST(Components, ManyLocalPiecesOfAnEarlierSlabsSegmentAreOneSegment) {
+  const Dims d{9, 1, 3 * kLabelSlab};
+  Grid g(d, 0.25f);
+  std::vector<std::uint8_t> st(d.count(), 0);
+  for (std::size_t z = 0; z < d.nz; ++z)
+    for (std::size_t x = 0; x < d.nx; ++x)
+      if (x % 2 == 1 && z < 2 * kLabelSlab) st[x + d.nx * z] = 2, g.p[x + d.nx * z] = 0.75f;
+  for (int threads : {1, 2}) {
+    LabelArray labels;
+    std::vector<Segment> segs;
+    label_components(st, g, labels, segs, threads);
+    ASSERT_EQ(segs.size(), 5u);  // the free comb, then the columns x = 1, 3, 5, 7
+    const Segment& comb = segs[0];
+    EXPECT_EQ(comb.state, State::free);
+    EXPECT_EQ(comb.voxels, 5u * 16 + 9u * 8);                     // 152
+    EXPECT_EQ(comb.mop, 0.25);
+    EXPECT_DOUBLE_EQ(comb.centroid[0], 608.0 / 152);            // (0+2+4+6+8)*16 + 36*8
+    EXPECT_DOUBLE_EQ(comb.centroid[2], (5.0 * 120 + 9.0 * 156) / 152);  // teeth z 0..15, bar z 16..23
+    EXPECT_EQ(comb.bbox_min, (std::array<std::uint32_t, 3>{0, 0, 0}));
+    EXPECT_EQ(comb.bbox_max, (std::array<std::uint32_t, 3>{8, 0, 23}));
+    for (std::uint32_t k = 1; k < 5; ++k) {
+      EXPECT_EQ(segs[k].state, State::occupied);
+      EXPECT_EQ(segs[k].voxels, 16u);
+      EXPECT_EQ(segs[k].mop, 0.75);
+      EXPECT_EQ(segs[k].bbox_min[0], 2 * k - 1);
+      EXPECT_DOUBLE_EQ(segs[k].centroid[2], 7.5);
+    }
+    for (std::size_t z = 0; z < d.nz; ++z)
+      for (std::size_t x = 0; x < d.nx; ++x)
+        EXPECT_EQ(labels[x + d.nx * z], st[x + d.nx * z] ? (x + 1) / 2 : 0u) << x << " " << z;
+  }
+}

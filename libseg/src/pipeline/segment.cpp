@@ -67,21 +67,6 @@ class Stages {
   std::chrono::steady_clock::time_point start_;
 };
 
-// Hands the pages of freed stage buffers back to the system. glibc raises its mmap threshold after
-// the first large free, so later buffers of a few MB come from the heap and stay resident when
-// freed; without this the process keeps every stage's buffers and its peak grows to ~8 bytes per
-// voxel instead of the ~5 that are alive at any time (docs/performance.md).
-void release_freed_memory() {
-#if defined(__GLIBC__)
-  // Serialised: when glibc's malloc is not the process's allocator (sanitizers, jemalloc or
-  // tcmalloc hosts) it is still uninitialised, and two first calls at once race in its lazy
-  // setup (a crash found by Concurrency.ProgressIsReportedOnTheCallingThread under ASan).
-  static std::mutex trim;
-  std::lock_guard<std::mutex> lock(trim);
-  malloc_trim(0);
-#endif
-}
-
 // check_probabilities(), with the common case (a valid map) tested in parallel vector code; the
 // scalar check runs only to name the first problem. values = false leaves the values to the
 // texture stage (the built-in operator tests each row while it reads it: one pass over the map
@@ -103,6 +88,21 @@ void check_map(const Grid& grid, int threads, bool values, const kernels::Table&
 }
 
 }  // namespace
+
+// Hands the pages of freed stage buffers back to the system. glibc raises its mmap threshold after
+// the first large free, so later buffers of a few MB come from the heap and stay resident when
+// freed; without this the process keeps every stage's buffers and its peak grows to ~8 bytes per
+// voxel instead of the ~5 that are alive at any time (docs/performance.md).
+void detail::release_freed_memory() {
+#if defined(__GLIBC__)
+  // Serialised: when glibc's malloc is not the process's allocator (sanitizers, jemalloc or
+  // tcmalloc hosts) it is still uninitialised, and two first calls at once race in its lazy
+  // setup (a crash found by Concurrency.ProgressIsReportedOnTheCallingThread under ASan).
+  static std::mutex trim;
+  std::lock_guard<std::mutex> lock(trim);
+  malloc_trim(0);
+#endif
+}
 
 Result segment(const Grid& grid, const Params& params, bool keep_stages) {
   // Without a caller's context, a pool for this call: its 20-odd parallel loops would otherwise
@@ -193,7 +193,7 @@ Result segment_into(const Grid& input, const Params& requested, bool keep_stages
     st.begin("division");
     blocks = divide(grid, tex, params, k);
     tex = TextureMap();
-    release_freed_memory();
+    detail::release_freed_memory();
     resize_huge(r.labels, n);
     in_workspace();
   }
@@ -256,7 +256,7 @@ Result segment_into(const Grid& input, const Params& requested, bool keep_stages
     local.unknown_bits = std::vector<std::uint64_t>();
     local.occupied_bits = std::vector<std::uint64_t>();
   }
-  release_freed_memory();
+  detail::release_freed_memory();
   st.begin("labelling");
   // The states go in: they are freed inside, before the segment statistics.
   detail::label_components(std::move(states), grid, r.labels, r.segments, params.threads,
@@ -269,6 +269,9 @@ Result segment_into(const Grid& input, const Params& requested, bool keep_stages
     group_objects(grid, r.labels, r.segments, params, &band_voxels);
     // Rule 11 before rule 5: a segment it makes structure (several planes) is not split again at
     // its largest plane alone (which would cut the walls off a floor as objects standing on it).
+    // The grouping's scratch and the segment table of before the grouping (80 bytes a segment:
+    // 1.5 bytes per voxel of a noisy map) go back to the system before rule 11 allocates.
+    detail::release_freed_memory();
     std::vector<PlanePiece> pieces;
     split_structure(grid, r.labels, r.segments, params, k, params.plane_holes > 0 ? &pieces : nullptr);
     // Rule 12 on rule 11's pieces, before rule 5 looks at what its planes see.

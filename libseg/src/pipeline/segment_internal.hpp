@@ -28,6 +28,8 @@ namespace detail {
 // Throws Error(unsupported) when a map of `voxels` voxels cannot have uint32 labels (2^32 - 1 or
 // more): segment() asks before it allocates anything, label_components() again.
 void check_labels_fit(std::size_t voxels);
+// Hands the pages of freed buffers back to the system (glibc: malloc_trim; elsewhere nothing).
+void release_freed_memory();
 }  // namespace detail
 
 }  // namespace occseg

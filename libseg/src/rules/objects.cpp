@@ -268,13 +268,16 @@ class Grouper {
         out.seeds.push_back({static_cast<std::uint32_t>(i), s, a});
       }
     });
-    std::size_t nfaces = 0;
+    // (The lists are sized once and each piece's freed as soon as it is taken: the seeds and the
+    // faces of a noisy map are a few MB, and grown or copied whole they were there twice.)
+    std::size_t nfaces = 0, nseeds = 0;
+    for (const Found& f : found) nfaces += f.faces.size(), nseeds += f.seeds.size();
+    seeds_.reserve(seeds_.size() + nseeds);
     for (Found& f : found) {
       for (const auto& j : f.joins) unite(j.first, j.second);
       f.joins = {};
       seeds_.insert(seeds_.end(), f.seeds.begin(), f.seeds.end());
       f.seeds = {};
-      nfaces += f.faces.size();
     }
     if (!pockets) return;
     // Listed by segment (a stable counting sort: a visit of the map in one pass meets them mixed).
@@ -283,8 +286,10 @@ class Grouper {
     for (std::size_t s = 0; s < S; ++s) face_at_[s + 1] += face_at_[s];
     faces_.resize(nfaces);
     std::vector<std::uint32_t> at(face_at_.begin(), face_at_.end() - 1);
-    for (const Found& f : found)
+    for (Found& f : found) {
       for (const Face& e : f.faces) faces_[at[e.segment]++] = e;
+      f.faces = {};
+    }
   }
 
   // Rule 6. A path of unknown voxels lies inside one unknown segment (a 6-connected region of

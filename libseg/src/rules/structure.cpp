@@ -153,6 +153,13 @@ class Structure {
   void list_members(std::uint32_t s, std::vector<std::uint32_t>& out) const {
     out.clear();
     const Segment& seg = segs_[s];
+    // Room for exactly its voxels, the old storage freed first: grown by push_back, the list of a
+    // noisy map's one sprawling segment peaked at its old and new storage together, 2.5 times
+    // the list's size.
+    if (out.capacity() < seg.voxels) {
+      out = std::vector<std::uint32_t>();
+      out.reserve(seg.voxels);
+    }
     for (std::size_t z = seg.bbox_min[2]; z <= seg.bbox_max[2]; ++z)
       for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1]; ++y) {
         const std::size_t row = g_.index(0, y, z);

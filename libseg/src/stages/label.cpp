@@ -166,6 +166,26 @@ class StartsBack {
   std::uint64_t w_ = 0;
 };
 
+// The run_sum kernel's sum (kernels/label.hpp: lane k % 8 from 0.0, the lanes added pairwise) of
+// a run shorter than a lane's turn, inline: most runs of a noisy map are that short, and the
+// kernel's call and vector set-up cost more than their few additions.
+// (n < 8: voxel k is lane k's only value, added to 0.0; a switch that falls through keeps the
+// lanes in registers, where a loop of variable length kept them in memory.)
+inline double short_run_sum(const float* v, std::size_t n) {
+  double l[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+  switch (n) {
+    case 7: l[6] = 0.0 + v[6]; [[fallthrough]];
+    case 6: l[5] = 0.0 + v[5]; [[fallthrough]];
+    case 5: l[4] = 0.0 + v[4]; [[fallthrough]];
+    case 4: l[3] = 0.0 + v[3]; [[fallthrough]];
+    case 3: l[2] = 0.0 + v[2]; [[fallthrough]];
+    case 2: l[1] = 0.0 + v[1]; [[fallthrough]];
+    case 1: l[0] = 0.0 + v[0]; [[fallthrough]];
+    default: break;
+  }
+  return ((l[0] + l[1]) + (l[2] + l[3])) + ((l[4] + l[5]) + (l[6] + l[7]));
+}
+
 // One run in a row's list of runs of its state: [x, e) along x, k its index in scan order.
 struct RunRef {
   std::uint32_t x, e, k;
@@ -286,6 +306,12 @@ class Labelling {
   }
 
   // Final ids in order of first voxel (a component's root precedes it), and each one's state.
+  // Then each slab's segments (in order of their first local component) and, in place of each
+  // local component's id, its slot among them: the statistics pass sums into the slots without
+  // sorting the slab's ids (a noisy map's slabs hold many local components of few segments).
+  // The slots are found through a sparse set over the segment ids, in the union-find's storage
+  // (a segment has one root at least, so it has room): slot_of[id] is id's slot in the slab being
+  // listed when that slot holds id, whatever the stale entry held before.
   void number_components() {
     final_id_.resize(base_[slabs]);
     for (std::size_t sl = 0; sl < slabs; ++sl) {
@@ -295,6 +321,21 @@ class Labelling {
         final_id_[k] = r == k ? static_cast<std::uint32_t>(state_of_.size() - 1) : final_id_[r];
       }
       local_state_[sl] = std::vector<std::uint8_t>();
+    }
+    std::uint32_t* const slot_of = parent_.data();
+    segments_in_.resize(slabs);
+    for (std::size_t sl = 0; sl < slabs; ++sl) {
+      std::vector<std::uint32_t>& in = segments_in_[sl];
+      for (std::uint32_t k = base_[sl]; k < base_[sl + 1]; ++k) {
+        const std::uint32_t id = final_id_[k];
+        std::uint32_t t = slot_of[id];
+        if (t >= in.size() || in[t] != id) {
+          t = static_cast<std::uint32_t>(in.size());
+          slot_of[id] = t;
+          in.push_back(id);
+        }
+        final_id_[k] = t;
+      }
     }
     parent_ = std::vector<std::uint32_t>();
   }
@@ -342,7 +383,9 @@ class Labelling {
   std::vector<std::array<std::uint32_t, 2>> plane_runs_;
   std::vector<std::uint32_t> base_;      // per slab: the global index of its local component 0
   std::vector<std::uint32_t> parent_;    // the join's union-find, by global index
-  std::vector<std::uint32_t> final_id_;  // per global index: the segment id
+  // Per global index: the segment id, then (number_components) its slot in its slab's list.
+  std::vector<std::uint32_t> final_id_;
+  std::vector<std::vector<std::uint32_t>> segments_in_;  // per slab: the ids of its segments, by slot
   std::vector<std::uint8_t> state_of_;   // per segment id
 };
 
@@ -512,6 +555,7 @@ void Labelling::segment_table(const Grid& g, std::vector<Segment>& segments, int
     slab_statistics(sl, g, slots[sl]);
     run_local_[sl] = std::vector<std::uint32_t>();
     row_first_[sl] = std::vector<std::uint32_t>();
+    segments_in_[sl] = std::vector<std::uint32_t>();
     std::lock_guard<std::mutex> lock(merge_mutex);
     finished[sl] = 1;
     for (; merged < slabs && finished[merged]; ++merged) {
@@ -529,30 +573,26 @@ void Labelling::segment_table(const Grid& g, std::vector<Segment>& segments, int
   }
 }
 
-// Slab sl's final labels, and its share of every segment present in it (in `out`, by order of
-// the segments' first voxels), summed run by run in scan order.
+// Slab sl's final labels, and its share of every segment present in it (in `out`, by slot),
+// summed run by run in scan order.
 void Labelling::slab_statistics(std::size_t sl, const Grid& g, detail::ThreadScratch<SlotStats>& out) {
   const float* const p = g.values();  // null for a grid read through a source: `map` converts each row
   detail::MapRows map(g);
   const std::size_t zb = sl * kLabelSlab, ze = std::min(nz, zb + kLabelSlab);
   std::uint32_t* const lab = lab_;
-  // Slot of each local component: segments present in this slab, in order of first voxel.
-  const std::uint32_t* ids = final_id_.data() + base_[sl];
-  const std::size_t local = local_count_[sl];
-  std::vector<std::uint32_t> uniq(ids, ids + local);
-  std::sort(uniq.begin(), uniq.end());
-  uniq.erase(std::unique(uniq.begin(), uniq.end()), uniq.end());
-  out.resize(uniq.size());
-  for (std::size_t k = 0; k < uniq.size(); ++k) {
-    out[k].id = uniq[k];
+  // Slot of each local component (number_components()): the segments present in this slab, in
+  // order of their first local component. (Each segment's sums go to one slot per slab, in scan
+  // order, and are merged slab by slab: the order of the slots changes no sum.)
+  const std::uint32_t* const slot = final_id_.data() + base_[sl];
+  const std::vector<std::uint32_t>& in = segments_in_[sl];
+  out.resize(in.size());
+  for (std::size_t k = 0; k < in.size(); ++k) {
+    out[k].id = in[k];
     for (int a = 0; a < 3; ++a) {
       out[k].lo[a] = std::numeric_limits<std::uint32_t>::max();
       out[k].hi[a] = 0;
     }
   }
-  std::vector<std::uint32_t> slot(local);
-  for (std::size_t k = 0; k < local; ++k)
-    slot[k] = static_cast<std::uint32_t>(std::lower_bound(uniq.begin(), uniq.end(), ids[k]) - uniq.begin());
   // A dense slab's local numbers, run after run in scan order; a sparse slab's are in the labels.
   const std::uint32_t* numbers = run_local_[sl].empty() ? nullptr : run_local_[sl].data();
   // The map's values and the label lines 1024 voxels ahead are prefetched, a line at a time as
@@ -573,9 +613,10 @@ void Labelling::slab_statistics(std::size_t sl, const Grid& g, detail::ThreadScr
         }
         const std::uint32_t l = numbers ? *numbers++ : lab[i0 + x];  // its local number
         SlotStats& t = out[slot[l]];
-        std::fill(lab + i0 + x, lab + i0 + e, ids[l]);
-        t.mop += k_.run_sum(prow + x, e - x);  // runs in scan order within the slab
+        std::fill(lab + i0 + x, lab + i0 + e, t.id);
         const std::uint64_t len = e - x;
+        // (runs in scan order within the slab)
+        t.mop += len < 8 ? short_run_sum(prow + x, len) : k_.run_sum(prow + x, len);
         t.voxels += len;
         t.sum[0] += (static_cast<std::uint64_t>(x) + e - 1) * len / 2;
         t.sum[1] += y * len;
@@ -643,8 +684,10 @@ void label_components(UninitVector<std::uint8_t>&& states, const Grid& grid, Lab
 void detail::label_components(UninitVector<std::uint8_t>&& states, const Grid& grid, LabelArray& labels,
                               std::vector<Segment>& segments, int threads, bool occupied26,
                               std::vector<std::uint8_t>& run_starts, const kernels::Table& k) {
-  label_states(states.data(), [&] { states = UninitVector<std::uint8_t>(); }, grid, labels, segments, threads,
-               occupied26, run_starts, k);
+  // (The states' pages go back at once: after a first call glibc takes blocks of their size from
+  // its heap, where a free keeps them resident through the statistics.)
+  label_states(states.data(), [&] { states = UninitVector<std::uint8_t>(); release_freed_memory(); }, grid, labels,
+               segments, threads, occupied26, run_starts, k);
 }
 
 }  // namespace occseg
