@@ -45,7 +45,7 @@ class PlaneHoles {
       const std::uint32_t s = labels_[i];
       if (taken[s] >= segs_[s].voxels) continue;
       const std::array<std::uint32_t, 3> c = coords(i);
-      const double p = g_.values()[i];
+      const double p = g_.value(i);
       out[s].add(c, p);
       in[t].add(c, p);
       for (int k = 0; k < 3; ++k)
