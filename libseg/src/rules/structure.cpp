@@ -124,6 +124,9 @@ class Structure {
     }
     for (std::size_t c = 0; c < candidates.size(); ++c) {
       if (bucket.empty()) {
+        // The sample test first, by a scan of the box: a sprawling region of noise is rejected
+        // before its voxels are listed (a list of 4 bytes per voxel of most of a noisy map).
+        if (!has_surfaces_in_box(candidates[c])) continue;
         list_members(candidates[c], listed_);
         members_ = {listed_.data(), listed_.size()};
       } else {
@@ -454,6 +457,33 @@ class Structure {
     return 1.4826 * near[near.size() / 2];
   }
 
+  // Whether voxel c of segment s is thin along some axis (a surface voxel; examine()).
+  bool thin_somewhere(std::uint32_t s, const Vec& c) const {
+    const int thin = std::max(4, p_.object_gap + 2);
+    for (int a = 0; a < 3; ++a)
+      if (thickness(s, c, a, thin + 1) <= thin) return true;
+    return false;
+  }
+
+  // examine()'s sample test on the same voxels (the members in scan order of the box, every
+  // n / k-th), found by scanning the box instead of reading a list.
+  bool has_surfaces_in_box(std::uint32_t s) const {
+    const Segment& seg = segs_[s];
+    const std::size_t n = seg.voxels, k = std::min<std::size_t>(n, 4096);
+    std::size_t seen = 0, next = 0, i = 0, surface = 0;
+    for (std::size_t z = seg.bbox_min[2]; z <= seg.bbox_max[2] && i < k; ++z)
+      for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1] && i < k; ++y) {
+        const std::size_t row = g_.index(0, y, z);
+        for (std::size_t x = seg.bbox_min[0]; x <= seg.bbox_max[0] && i < k; ++x) {
+          if (labels_[row + x] != s) continue;
+          if (seen++ != next) continue;
+          surface += thin_somewhere(s, coords(row + x));
+          next = ++i * n / k;
+        }
+      }
+    return 100 * surface >= kMinSurfacePercent * k;
+  }
+
   void examine(std::uint32_t s) {
     const std::size_t n = members_.size();
     // Each voxel's possible orientations: axis a when the segment is thin along a through it
@@ -463,21 +493,13 @@ class Structure {
     // The planes are searched among the voxels of one orientation at a time (z: floors, ceilings,
     // table tops first; then y, then x): a plane within 45 degrees of an axis is found among that
     // axis' voxels.
-    const int thin = std::max(4, p_.object_gap + 2);
     // A segment whose voxels are mostly thick along every axis (a sprawling region of noise) holds
     // no surfaces: judged on an evenly strided sample of at most 4096 of its voxels before any
     // work per voxel.
     {
       const std::size_t k = std::min<std::size_t>(n, 4096);
       std::size_t surface = 0;
-      for (std::size_t i = 0; i < k; ++i) {
-        const Vec q = coords(members_[i * n / k]);
-        for (int a = 0; a < 3; ++a)
-          if (thickness(s, q, a, thin + 1) <= thin) {
-            ++surface;
-            break;
-          }
-      }
+      for (std::size_t i = 0; i < k; ++i) surface += thin_somewhere(s, coords(members_[i * n / k]));
       if (100 * surface < kMinSurfacePercent * k) return;
     }
     // Past the sample only: a segment skipped above never costs memory per voxel.
