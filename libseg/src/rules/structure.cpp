@@ -199,15 +199,44 @@ class Structure {
     const auto key = [](std::int64_t a, std::int64_t b) {
       return (std::uint64_t(a + (std::int64_t(1) << 31)) << 32) | std::uint64_t(b + (std::int64_t(1) << 31));
     };
-    std::vector<std::uint64_t> cell(inl.size());
-    for (std::size_t i = 0; i < inl.size(); ++i) {
+    const std::size_t N = inl.size();
+    std::vector<std::int64_t> ca(N), cb(N);
+    std::int64_t amin = std::numeric_limits<std::int64_t>::max(), amax = std::numeric_limits<std::int64_t>::min();
+    std::int64_t bmin = amin, bmax = amax;
+    for (std::size_t i = 0; i < N; ++i) {
       const Vec& q = pts_[inl[i]];
-      cell[i] = key(static_cast<std::int64_t>(std::floor(dot(q, u) / cell_)),
-                    static_cast<std::int64_t>(std::floor(dot(q, v) / cell_)));
+      ca[i] = static_cast<std::int64_t>(std::floor(dot(q, u) / cell_));
+      cb[i] = static_cast<std::int64_t>(std::floor(dot(q, v) / cell_));
+      amin = std::min(amin, ca[i]), amax = std::max(amax, ca[i]);
+      bmin = std::min(bmin, cb[i]), bmax = std::max(bmax, cb[i]);
     }
-    std::vector<std::uint64_t> cells = cell;
-    std::sort(cells.begin(), cells.end());
-    cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+    // The sorted distinct cells and each inlier's place among them (cell_at): when the cells' box
+    // is small against the inliers, by marking a dense array over it in key order (row a, then b:
+    // the keys' order), else by sorting the keys and a binary search per inlier.
+    std::vector<std::uint64_t> cells;
+    std::vector<std::uint32_t> cell_at(N);
+    const std::uint64_t A = N ? std::uint64_t(amax - amin) + 1 : 0, B = N ? std::uint64_t(bmax - bmin) + 1 : 0;
+    const std::uint64_t dense_max = std::max<std::uint64_t>(4096, 4 * std::uint64_t(N));
+    if (N && A <= dense_max && B <= dense_max && A * B <= dense_max) {
+      std::vector<std::uint32_t> dense(A * B, 0);
+      for (std::size_t i = 0; i < N; ++i) dense[std::uint64_t(ca[i] - amin) * B + std::uint64_t(cb[i] - bmin)] = 1;
+      for (std::uint64_t a = 0, at = 0; a < A; ++a)
+        for (std::uint64_t b = 0; b < B; ++b, ++at)
+          if (dense[at]) {
+            dense[at] = static_cast<std::uint32_t>(cells.size());
+            cells.push_back(key(amin + std::int64_t(a), bmin + std::int64_t(b)));
+          }
+      for (std::size_t i = 0; i < N; ++i)
+        cell_at[i] = dense[std::uint64_t(ca[i] - amin) * B + std::uint64_t(cb[i] - bmin)];
+    } else {
+      std::vector<std::uint64_t> cell(N);
+      for (std::size_t i = 0; i < N; ++i) cell[i] = key(ca[i], cb[i]);
+      cells = cell;
+      std::sort(cells.begin(), cells.end());
+      cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+      for (std::size_t i = 0; i < N; ++i)
+        cell_at[i] = static_cast<std::uint32_t>(std::lower_bound(cells.begin(), cells.end(), cell[i]) - cells.begin());
+    }
     std::vector<std::uint32_t> parent(cells.size());
     std::iota(parent.begin(), parent.end(), 0u);
     const auto find = [&](std::uint32_t a) {
@@ -258,11 +287,8 @@ class Structure {
       inner[k] += behind < C && cells[behind] == wm && after < C && cells[after] == wp && c > 0 &&
                   cells[c - 1] == neighbour(w, 0, -1) && c + 1 < C && cells[c + 1] == neighbour(w, 0, 1);
     }
-    std::vector<std::uint32_t> piece(inl.size());
-    for (std::size_t i = 0; i < inl.size(); ++i) {
-      const auto it = std::lower_bound(cells.begin(), cells.end(), cell[i]);
-      piece[i] = number[find(static_cast<std::uint32_t>(it - cells.begin()))];
-    }
+    std::vector<std::uint32_t> piece(N);
+    for (std::size_t i = 0; i < N; ++i) piece[i] = number[find(cell_at[i])];
     return piece;
   }
 
