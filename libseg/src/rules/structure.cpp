@@ -420,6 +420,9 @@ class Structure {
     double lo[3], hi[3];
     const std::uint32_t* order = nullptr;  // nullptr: scan order
     std::size_t i0 = 0, i1 = 0;
+    // rows: visit the rows (y, z) of the box instead (rows_), each over its x range only.
+    bool rows = false;
+    long x0 = 0, x1 = -1, y0 = 0, y1 = -1, z0 = 0, z1 = -1;
     std::size_t at(std::size_t i) const { return order ? order[i] : i; }
     bool holds(const Vec& q) const {
       return q[0] >= lo[0] && q[0] <= hi[0] && q[1] >= lo[1] && q[1] <= hi[1] && q[2] >= lo[2] && q[2] <= hi[2];
@@ -452,7 +455,35 @@ class Structure {
       }
       if (lo - i0 < best) best = lo - i0, b.order = order, b.i0 = i0, b.i1 = lo;
     }
+    // The box's integer coordinates (the voxels holds() takes), rows clamped to rows_' box; its
+    // rows are walked when they are few against the voxels of the range above.
+    b.x0 = long(std::ceil(b.lo[0])), b.x1 = long(std::floor(b.hi[0]));
+    b.y0 = std::max(long(std::ceil(b.lo[1])), row_y0_), b.y1 = std::min(long(std::floor(b.hi[1])), row_y0_ + row_by_ - 1);
+    b.z0 = std::max(long(std::ceil(b.lo[2])), row_z0_), b.z1 = std::min(long(std::floor(b.hi[2])), row_z0_ + row_bz_ - 1);
+    const std::size_t rows = b.y0 <= b.y1 && b.z0 <= b.z1 ? std::size_t(b.y1 - b.y0 + 1) * std::size_t(b.z1 - b.z0 + 1) : 0;
+    b.rows = 4 * rows < best;
     return b;
+  }
+
+  // f(m) for the voxels of the box's range (Box::at), or of its rows; the order differs, the set
+  // of voxels holds() takes does not.
+  template <class F>
+  void for_box(const Box& b, F&& f) const {
+    if (!b.rows) {
+      for (std::size_t i = b.i0; i < b.i1; ++i) f(b.at(i));
+      return;
+    }
+    const double x0 = double(b.x0), x1 = double(b.x1);
+    for (long z = b.z0; z <= b.z1; ++z)
+      for (long y = b.y0; y <= b.y1; ++y) {
+        const std::size_t r = std::size_t(z - row_z0_) * std::size_t(row_by_) + std::size_t(y - row_y0_);
+        std::size_t lo = rows_[r], hi = rows_[r + 1];
+        while (lo < hi) {  // first voxel of the row with x >= x0
+          const std::size_t mid = lo + (hi - lo) / 2;
+          if (pts_[mid][0] < x0) lo = mid + 1; else hi = mid;
+        }
+        for (std::size_t m = lo, e = rows_[r + 1]; m < e && pts_[m][0] <= x1; ++m) f(m);
+      }
   }
 
   // Robust spread of a plane's surface: 1.4826 x the median |distance| of the segment's voxels
@@ -468,16 +499,15 @@ class Structure {
                        const std::vector<std::int32_t>& piece_of) const {
     std::vector<double> near;
     const Box box = band_box(pc, 4.0, 0.0);
-    for (std::size_t i = box.i0; i < box.i1; ++i) {
-      const Vec& q = pts_[box.at(i)];
-      const std::size_t m = box.at(i);
-      if (!box.holds(q) || !(axes[m] >> pc.axis & 1) || (piece_of[m] >= 0 && piece_of[m] != self)) continue;
+    for_box(box, [&](std::size_t m) {
+      const Vec& q = pts_[m];
+      if (!box.holds(q) || !(axes[m] >> pc.axis & 1) || (piece_of[m] >= 0 && piece_of[m] != self)) return;
       const double e = std::fabs(pc.pl.distance(q[0], q[1], q[2]));
-      if (e > 4.0) continue;
+      if (e > 4.0) return;
       const double a = dot(q, pc.u), b = dot(q, pc.v);
-      if (a < pc.u0 || a > pc.u1 || b < pc.v0 || b > pc.v1) continue;
+      if (a < pc.u0 || a > pc.u1 || b < pc.v0 || b > pc.v1) return;
       near.push_back(e);
-    }
+    });
     if (near.empty()) return 0;
     std::nth_element(near.begin(), near.begin() + std::ptrdiff_t(near.size() / 2), near.end());
     return 1.4826 * near[near.size() / 2];
@@ -541,6 +571,18 @@ class Structure {
         by_[k].resize(n);
         for (std::size_t m = 0; m < n; ++m) by_[k][start[std::size_t(pts_[m][std::size_t(k)])]++] = std::uint32_t(m);
       }
+    }
+    {  // rows_: where each row (y, z) of the voxels' box starts in pts_ (scan order)
+      long y0 = long(d_.ny), y1 = 0, z0 = long(d_.nz), z1 = 0;
+      for (std::size_t m = 0; m < n; ++m) {
+        const long y = long(pts_[m][1]), z = long(pts_[m][2]);
+        y0 = std::min(y0, y), y1 = std::max(y1, y), z0 = std::min(z0, z), z1 = std::max(z1, z);
+      }
+      row_y0_ = y0, row_z0_ = z0, row_by_ = y1 - y0 + 1, row_bz_ = z1 - z0 + 1;
+      rows_.assign(std::size_t(row_by_) * std::size_t(row_bz_) + 1, 0);
+      for (std::size_t m = 0; m < n; ++m)
+        ++rows_[std::size_t(long(pts_[m][2]) - z0) * std::size_t(row_by_) + std::size_t(long(pts_[m][1]) - y0) + 1];
+      for (std::size_t r = 1; r < rows_.size(); ++r) rows_[r] += rows_[r - 1];
     }
     std::vector<std::int32_t> piece_of(n, -1);  // structural piece (index into local) or -1
     std::vector<Piece> local;                   // this segment's pieces of >= min_plane voxels
@@ -699,15 +741,14 @@ class Structure {
       const Piece& pc = local[p];
       if (!pc.structural) continue;
       const Box box = band_box(pc, kPlaneInlierDistance, w);
-      for (std::size_t i = box.i0; i < box.i1; ++i) {
-        const std::size_t m = box.at(i);
-        if (piece_of[m] >= 0) continue;
+      for_box(box, [&](std::size_t m) {
+        if (piece_of[m] >= 0) return;
         const Vec& q = pts_[m];
-        if (!box.holds(q) || std::fabs(pc.pl.distance(q[0], q[1], q[2])) > kPlaneInlierDistance) continue;
+        if (!box.holds(q) || std::fabs(pc.pl.distance(q[0], q[1], q[2])) > kPlaneInlierDistance) return;
         const double a = dot(q, pc.u), b = dot(q, pc.v);
-        if (a < pc.u0 - w || a > pc.u1 + w || b < pc.v0 - w || b > pc.v1 + w) continue;
+        if (a < pc.u0 - w || a > pc.u1 + w || b < pc.v0 - w || b > pc.v1 + w) return;
         piece_of[m] = static_cast<std::int32_t>(p);
-      }
+      });
     }
     const bool structural = std::any_of(local.begin(), local.end(), [](const Piece& pc) { return pc.structural; });
     if (!structural) {  // unsplit: its pieces still gather coplanar fragments
@@ -736,16 +777,15 @@ class Structure {
       const double t = 0.5 * pc.min_height;
       const int fits = static_cast<int>(std::floor(2 * t));
       const Box box = band_box(pc, t, w);
-      for (std::size_t i = box.i0; i < box.i1; ++i) {
-        const std::size_t m = box.at(i);
-        if (take[m] >= 0 || labels_[members_[m]] != s) continue;
+      for_box(box, [&](std::size_t m) {
+        if (take[m] >= 0 || labels_[members_[m]] != s) return;
         const Vec& x = pts_[m];
-        if (!box.holds(x) || std::fabs(pc.pl.distance(x[0], x[1], x[2])) > t) continue;
+        if (!box.holds(x) || std::fabs(pc.pl.distance(x[0], x[1], x[2])) > t) return;
         const double a = dot(x, pc.u), b = dot(x, pc.v);
-        if (a < pc.u0 - w || a > pc.u1 + w || b < pc.v0 - w || b > pc.v1 + w) continue;
-        if (thickness(s, x, pc.axis, fits + 1) > fits) continue;
+        if (a < pc.u0 - w || a > pc.u1 + w || b < pc.v0 - w || b > pc.v1 + w) return;
+        if (thickness(s, x, pc.axis, fits + 1) > fits) return;
         take[m] = static_cast<std::int32_t>(q);
-      }
+      });
     }
     for (std::size_t m = 0; m < n; ++m)
       if (take[m] >= 0) labels_[members_[m]] = kTop - static_cast<std::uint32_t>(take[m]);
@@ -1016,6 +1056,10 @@ class Structure {
   std::vector<std::uint32_t> listed_;
   std::vector<Vec> pts_;
   std::vector<std::uint32_t> by_[2];  // the examined segment's voxels (into pts_) by x, by y
+  // Where each row of the examined segment's voxels' box starts in pts_ (row (y, z):
+  // (z - row_z0_) row_by_ + y - row_y0_), and one past the last.
+  std::vector<std::uint32_t> rows_;
+  long row_y0_ = 0, row_z0_ = 0, row_by_ = 0, row_bz_ = 0;
   std::vector<Piece> pieces_;  // gather fragments: unsplit segments' pieces, structural pieces
 };
 
