@@ -166,9 +166,26 @@ class Structure {
     for (std::size_t z = seg.bbox_min[2]; z <= seg.bbox_max[2]; ++z)
       for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1]; ++y) {
         const std::size_t row = g_.index(0, y, z);
-        for (std::size_t x = seg.bbox_min[0]; x <= seg.bbox_max[0]; ++x)
-          if (labels_[row + x] == s) out.push_back(static_cast<std::uint32_t>(row + x));
+        for_label(row + seg.bbox_min[0], row + seg.bbox_max[0] + 1, s,
+                  [&](std::size_t i) { out.push_back(static_cast<std::uint32_t>(i)); });
       }
+  }
+
+  // f(i) for the voxels i in [b, e) labelled s, in order; 16 voxels at a time are passed over
+  // when none is (one vectorised test: a segment is sparse in its box).
+  template <class F>
+  void for_label(std::size_t b, std::size_t e, std::uint32_t s, F&& f) const {
+    const std::uint32_t* l = labels_.data();
+    std::size_t i = b;
+    for (; i + 16 <= e; i += 16) {
+      unsigned any = 0;
+      for (int j = 0; j < 16; ++j) any |= unsigned(l[i + std::size_t(j)] == s);
+      if (!any) continue;
+      for (std::size_t j = i; j < i + 16; ++j)
+        if (l[j] == s) f(j);
+    }
+    for (; i < e; ++i)
+      if (l[i] == s) f(i);
   }
 
   // The neighbours of voxel i inside the map, in VoxelNeighbours' order.
@@ -530,12 +547,11 @@ class Structure {
     for (std::size_t z = seg.bbox_min[2]; z <= seg.bbox_max[2] && i < k; ++z)
       for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1] && i < k; ++y) {
         const std::size_t row = g_.index(0, y, z);
-        for (std::size_t x = seg.bbox_min[0]; x <= seg.bbox_max[0] && i < k; ++x) {
-          if (labels_[row + x] != s) continue;
-          if (seen++ != next) continue;
-          surface += thin_somewhere(s, coords(row + x));
+        for_label(row + seg.bbox_min[0], row + seg.bbox_max[0] + 1, s, [&](std::size_t j) {
+          if (i >= k || seen++ != next) return;  // (the row's members past the last sample: none)
+          surface += thin_somewhere(s, coords(j));
           next = ++i * n / k;
-        }
+        });
       }
     return 100 * surface >= kMinSurfacePercent * k;
   }
