@@ -166,9 +166,26 @@ class Structure {
     for (std::size_t z = seg.bbox_min[2]; z <= seg.bbox_max[2]; ++z)
       for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1]; ++y) {
         const std::size_t row = g_.index(0, y, z);
-        for (std::size_t x = seg.bbox_min[0]; x <= seg.bbox_max[0]; ++x)
-          if (labels_[row + x] == s) out.push_back(static_cast<std::uint32_t>(row + x));
+        for_label(row + seg.bbox_min[0], row + seg.bbox_max[0] + 1, s,
+                  [&](std::size_t i) { out.push_back(static_cast<std::uint32_t>(i)); });
       }
+  }
+
+  // f(i) for the voxels i in [b, e) labelled s, in order; 16 voxels at a time are passed over
+  // when none is (one vectorised test: a segment is sparse in its box).
+  template <class F>
+  void for_label(std::size_t b, std::size_t e, std::uint32_t s, F&& f) const {
+    const std::uint32_t* l = labels_.data();
+    std::size_t i = b;
+    for (; i + 16 <= e; i += 16) {
+      unsigned any = 0;
+      for (int j = 0; j < 16; ++j) any |= unsigned(l[i + std::size_t(j)] == s);
+      if (!any) continue;
+      for (std::size_t j = i; j < i + 16; ++j)
+        if (l[j] == s) f(j);
+    }
+    for (; i < e; ++i)
+      if (l[i] == s) f(i);
   }
 
   // The neighbours of voxel i inside the map, in VoxelNeighbours' order.
@@ -199,15 +216,44 @@ class Structure {
     const auto key = [](std::int64_t a, std::int64_t b) {
       return (std::uint64_t(a + (std::int64_t(1) << 31)) << 32) | std::uint64_t(b + (std::int64_t(1) << 31));
     };
-    std::vector<std::uint64_t> cell(inl.size());
-    for (std::size_t i = 0; i < inl.size(); ++i) {
+    const std::size_t N = inl.size();
+    std::vector<std::int64_t> ca(N), cb(N);
+    std::int64_t amin = std::numeric_limits<std::int64_t>::max(), amax = std::numeric_limits<std::int64_t>::min();
+    std::int64_t bmin = amin, bmax = amax;
+    for (std::size_t i = 0; i < N; ++i) {
       const Vec& q = pts_[inl[i]];
-      cell[i] = key(static_cast<std::int64_t>(std::floor(dot(q, u) / cell_)),
-                    static_cast<std::int64_t>(std::floor(dot(q, v) / cell_)));
+      ca[i] = static_cast<std::int64_t>(std::floor(dot(q, u) / cell_));
+      cb[i] = static_cast<std::int64_t>(std::floor(dot(q, v) / cell_));
+      amin = std::min(amin, ca[i]), amax = std::max(amax, ca[i]);
+      bmin = std::min(bmin, cb[i]), bmax = std::max(bmax, cb[i]);
     }
-    std::vector<std::uint64_t> cells = cell;
-    std::sort(cells.begin(), cells.end());
-    cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+    // The sorted distinct cells and each inlier's place among them (cell_at): when the cells' box
+    // is small against the inliers, by marking a dense array over it in key order (row a, then b:
+    // the keys' order), else by sorting the keys and a binary search per inlier.
+    std::vector<std::uint64_t> cells;
+    std::vector<std::uint32_t> cell_at(N);
+    const std::uint64_t A = N ? std::uint64_t(amax - amin) + 1 : 0, B = N ? std::uint64_t(bmax - bmin) + 1 : 0;
+    const std::uint64_t dense_max = std::max<std::uint64_t>(4096, 4 * std::uint64_t(N));
+    if (N && A <= dense_max && B <= dense_max && A * B <= dense_max) {
+      std::vector<std::uint32_t> dense(A * B, 0);
+      for (std::size_t i = 0; i < N; ++i) dense[std::uint64_t(ca[i] - amin) * B + std::uint64_t(cb[i] - bmin)] = 1;
+      for (std::uint64_t a = 0, at = 0; a < A; ++a)
+        for (std::uint64_t b = 0; b < B; ++b, ++at)
+          if (dense[at]) {
+            dense[at] = static_cast<std::uint32_t>(cells.size());
+            cells.push_back(key(amin + std::int64_t(a), bmin + std::int64_t(b)));
+          }
+      for (std::size_t i = 0; i < N; ++i)
+        cell_at[i] = dense[std::uint64_t(ca[i] - amin) * B + std::uint64_t(cb[i] - bmin)];
+    } else {
+      std::vector<std::uint64_t> cell(N);
+      for (std::size_t i = 0; i < N; ++i) cell[i] = key(ca[i], cb[i]);
+      cells = cell;
+      std::sort(cells.begin(), cells.end());
+      cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+      for (std::size_t i = 0; i < N; ++i)
+        cell_at[i] = static_cast<std::uint32_t>(std::lower_bound(cells.begin(), cells.end(), cell[i]) - cells.begin());
+    }
     std::vector<std::uint32_t> parent(cells.size());
     std::iota(parent.begin(), parent.end(), 0u);
     const auto find = [&](std::uint32_t a) {
@@ -258,11 +304,8 @@ class Structure {
       inner[k] += behind < C && cells[behind] == wm && after < C && cells[after] == wp && c > 0 &&
                   cells[c - 1] == neighbour(w, 0, -1) && c + 1 < C && cells[c + 1] == neighbour(w, 0, 1);
     }
-    std::vector<std::uint32_t> piece(inl.size());
-    for (std::size_t i = 0; i < inl.size(); ++i) {
-      const auto it = std::lower_bound(cells.begin(), cells.end(), cell[i]);
-      piece[i] = number[find(static_cast<std::uint32_t>(it - cells.begin()))];
-    }
+    std::vector<std::uint32_t> piece(N);
+    for (std::size_t i = 0; i < N; ++i) piece[i] = number[find(cell_at[i])];
     return piece;
   }
 
@@ -394,6 +437,9 @@ class Structure {
     double lo[3], hi[3];
     const std::uint32_t* order = nullptr;  // nullptr: scan order
     std::size_t i0 = 0, i1 = 0;
+    // rows: visit the rows (y, z) of the box instead (rows_), each over its x range only.
+    bool rows = false;
+    long x0 = 0, x1 = -1, y0 = 0, y1 = -1, z0 = 0, z1 = -1;
     std::size_t at(std::size_t i) const { return order ? order[i] : i; }
     bool holds(const Vec& q) const {
       return q[0] >= lo[0] && q[0] <= hi[0] && q[1] >= lo[1] && q[1] <= hi[1] && q[2] >= lo[2] && q[2] <= hi[2];
@@ -426,7 +472,35 @@ class Structure {
       }
       if (lo - i0 < best) best = lo - i0, b.order = order, b.i0 = i0, b.i1 = lo;
     }
+    // The box's integer coordinates (the voxels holds() takes), rows clamped to rows_' box; its
+    // rows are walked when they are few against the voxels of the range above.
+    b.x0 = long(std::ceil(b.lo[0])), b.x1 = long(std::floor(b.hi[0]));
+    b.y0 = std::max(long(std::ceil(b.lo[1])), row_y0_), b.y1 = std::min(long(std::floor(b.hi[1])), row_y0_ + row_by_ - 1);
+    b.z0 = std::max(long(std::ceil(b.lo[2])), row_z0_), b.z1 = std::min(long(std::floor(b.hi[2])), row_z0_ + row_bz_ - 1);
+    const std::size_t rows = b.y0 <= b.y1 && b.z0 <= b.z1 ? std::size_t(b.y1 - b.y0 + 1) * std::size_t(b.z1 - b.z0 + 1) : 0;
+    b.rows = 4 * rows < best;
     return b;
+  }
+
+  // f(m) for the voxels of the box's range (Box::at), or of its rows; the order differs, the set
+  // of voxels holds() takes does not.
+  template <class F>
+  void for_box(const Box& b, F&& f) const {
+    if (!b.rows) {
+      for (std::size_t i = b.i0; i < b.i1; ++i) f(b.at(i));
+      return;
+    }
+    const double x0 = double(b.x0), x1 = double(b.x1);
+    for (long z = b.z0; z <= b.z1; ++z)
+      for (long y = b.y0; y <= b.y1; ++y) {
+        const std::size_t r = std::size_t(z - row_z0_) * std::size_t(row_by_) + std::size_t(y - row_y0_);
+        std::size_t lo = rows_[r], hi = rows_[r + 1];
+        while (lo < hi) {  // first voxel of the row with x >= x0
+          const std::size_t mid = lo + (hi - lo) / 2;
+          if (pts_[mid][0] < x0) lo = mid + 1; else hi = mid;
+        }
+        for (std::size_t m = lo, e = rows_[r + 1]; m < e && pts_[m][0] <= x1; ++m) f(m);
+      }
   }
 
   // Robust spread of a plane's surface: 1.4826 x the median |distance| of the segment's voxels
@@ -442,16 +516,15 @@ class Structure {
                        const std::vector<std::int32_t>& piece_of) const {
     std::vector<double> near;
     const Box box = band_box(pc, 4.0, 0.0);
-    for (std::size_t i = box.i0; i < box.i1; ++i) {
-      const Vec& q = pts_[box.at(i)];
-      const std::size_t m = box.at(i);
-      if (!box.holds(q) || !(axes[m] >> pc.axis & 1) || (piece_of[m] >= 0 && piece_of[m] != self)) continue;
+    for_box(box, [&](std::size_t m) {
+      const Vec& q = pts_[m];
+      if (!box.holds(q) || !(axes[m] >> pc.axis & 1) || (piece_of[m] >= 0 && piece_of[m] != self)) return;
       const double e = std::fabs(pc.pl.distance(q[0], q[1], q[2]));
-      if (e > 4.0) continue;
+      if (e > 4.0) return;
       const double a = dot(q, pc.u), b = dot(q, pc.v);
-      if (a < pc.u0 || a > pc.u1 || b < pc.v0 || b > pc.v1) continue;
+      if (a < pc.u0 || a > pc.u1 || b < pc.v0 || b > pc.v1) return;
       near.push_back(e);
-    }
+    });
     if (near.empty()) return 0;
     std::nth_element(near.begin(), near.begin() + std::ptrdiff_t(near.size() / 2), near.end());
     return 1.4826 * near[near.size() / 2];
@@ -474,12 +547,11 @@ class Structure {
     for (std::size_t z = seg.bbox_min[2]; z <= seg.bbox_max[2] && i < k; ++z)
       for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1] && i < k; ++y) {
         const std::size_t row = g_.index(0, y, z);
-        for (std::size_t x = seg.bbox_min[0]; x <= seg.bbox_max[0] && i < k; ++x) {
-          if (labels_[row + x] != s) continue;
-          if (seen++ != next) continue;
-          surface += thin_somewhere(s, coords(row + x));
+        for_label(row + seg.bbox_min[0], row + seg.bbox_max[0] + 1, s, [&](std::size_t j) {
+          if (i >= k || seen++ != next) return;  // (the row's members past the last sample: none)
+          surface += thin_somewhere(s, coords(j));
           next = ++i * n / k;
-        }
+        });
       }
     return 100 * surface >= kMinSurfacePercent * k;
   }
@@ -515,6 +587,18 @@ class Structure {
         by_[k].resize(n);
         for (std::size_t m = 0; m < n; ++m) by_[k][start[std::size_t(pts_[m][std::size_t(k)])]++] = std::uint32_t(m);
       }
+    }
+    {  // rows_: where each row (y, z) of the voxels' box starts in pts_ (scan order)
+      long y0 = long(d_.ny), y1 = 0, z0 = long(d_.nz), z1 = 0;
+      for (std::size_t m = 0; m < n; ++m) {
+        const long y = long(pts_[m][1]), z = long(pts_[m][2]);
+        y0 = std::min(y0, y), y1 = std::max(y1, y), z0 = std::min(z0, z), z1 = std::max(z1, z);
+      }
+      row_y0_ = y0, row_z0_ = z0, row_by_ = y1 - y0 + 1, row_bz_ = z1 - z0 + 1;
+      rows_.assign(std::size_t(row_by_) * std::size_t(row_bz_) + 1, 0);
+      for (std::size_t m = 0; m < n; ++m)
+        ++rows_[std::size_t(long(pts_[m][2]) - z0) * std::size_t(row_by_) + std::size_t(long(pts_[m][1]) - y0) + 1];
+      for (std::size_t r = 1; r < rows_.size(); ++r) rows_[r] += rows_[r - 1];
     }
     std::vector<std::int32_t> piece_of(n, -1);  // structural piece (index into local) or -1
     std::vector<Piece> local;                   // this segment's pieces of >= min_plane voxels
@@ -673,15 +757,14 @@ class Structure {
       const Piece& pc = local[p];
       if (!pc.structural) continue;
       const Box box = band_box(pc, kPlaneInlierDistance, w);
-      for (std::size_t i = box.i0; i < box.i1; ++i) {
-        const std::size_t m = box.at(i);
-        if (piece_of[m] >= 0) continue;
+      for_box(box, [&](std::size_t m) {
+        if (piece_of[m] >= 0) return;
         const Vec& q = pts_[m];
-        if (!box.holds(q) || std::fabs(pc.pl.distance(q[0], q[1], q[2])) > kPlaneInlierDistance) continue;
+        if (!box.holds(q) || std::fabs(pc.pl.distance(q[0], q[1], q[2])) > kPlaneInlierDistance) return;
         const double a = dot(q, pc.u), b = dot(q, pc.v);
-        if (a < pc.u0 - w || a > pc.u1 + w || b < pc.v0 - w || b > pc.v1 + w) continue;
+        if (a < pc.u0 - w || a > pc.u1 + w || b < pc.v0 - w || b > pc.v1 + w) return;
         piece_of[m] = static_cast<std::int32_t>(p);
-      }
+      });
     }
     const bool structural = std::any_of(local.begin(), local.end(), [](const Piece& pc) { return pc.structural; });
     if (!structural) {  // unsplit: its pieces still gather coplanar fragments
@@ -710,16 +793,15 @@ class Structure {
       const double t = 0.5 * pc.min_height;
       const int fits = static_cast<int>(std::floor(2 * t));
       const Box box = band_box(pc, t, w);
-      for (std::size_t i = box.i0; i < box.i1; ++i) {
-        const std::size_t m = box.at(i);
-        if (take[m] >= 0 || labels_[members_[m]] != s) continue;
+      for_box(box, [&](std::size_t m) {
+        if (take[m] >= 0 || labels_[members_[m]] != s) return;
         const Vec& x = pts_[m];
-        if (!box.holds(x) || std::fabs(pc.pl.distance(x[0], x[1], x[2])) > t) continue;
+        if (!box.holds(x) || std::fabs(pc.pl.distance(x[0], x[1], x[2])) > t) return;
         const double a = dot(x, pc.u), b = dot(x, pc.v);
-        if (a < pc.u0 - w || a > pc.u1 + w || b < pc.v0 - w || b > pc.v1 + w) continue;
-        if (thickness(s, x, pc.axis, fits + 1) > fits) continue;
+        if (a < pc.u0 - w || a > pc.u1 + w || b < pc.v0 - w || b > pc.v1 + w) return;
+        if (thickness(s, x, pc.axis, fits + 1) > fits) return;
         take[m] = static_cast<std::int32_t>(q);
-      }
+      });
     }
     for (std::size_t m = 0; m < n; ++m)
       if (take[m] >= 0) labels_[members_[m]] = kTop - static_cast<std::uint32_t>(take[m]);
@@ -990,6 +1072,10 @@ class Structure {
   std::vector<std::uint32_t> listed_;
   std::vector<Vec> pts_;
   std::vector<std::uint32_t> by_[2];  // the examined segment's voxels (into pts_) by x, by y
+  // Where each row of the examined segment's voxels' box starts in pts_ (row (y, z):
+  // (z - row_z0_) row_by_ + y - row_y0_), and one past the last.
+  std::vector<std::uint32_t> rows_;
+  long row_y0_ = 0, row_z0_ = 0, row_by_ = 0, row_bz_ = 0;
   std::vector<Piece> pieces_;  // gather fragments: unsplit segments' pieces, structural pieces
 };
 
