@@ -313,22 +313,21 @@ class Grouper {
   //     the groups are exactly the closure of "a path of at most object_gap unknown voxels",
   //     whichever segment a tie kept and in whatever order the seeds were found.
   // The labels of the voxels searched (and, found from the occupied side, of every seed) hold the
-  // kept segment and their d during the search, as kept + d * S (LabelMarks: S segments, d at most
-  // object_gap <= 16, so it fits 32 bits unless S is above 2^32 / 17, when d has an array of its
-  // own, ArrayMarks), and get theirs back after it. Marked labels are at least S, so no scan takes
-  // them for a segment's; and no scratch the size of the map is allocated and cleared.
+  // kept segment and their d during the search, as kept | d << b (LabelMarks: 2^b >= S segments,
+  // d at most object_gap <= 16, so it fits 32 bits unless S is above about 2^27, when d has an
+  // array of its own, ArrayMarks), and get theirs back after it. Marked labels are at least 2^b
+  // >= S, so no scan takes them for a segment's; and no scratch the size of the map is allocated
+  // and cleared.
   struct LabelMarks {
     std::uint32_t* labels;
-    std::uint32_t S;
+    unsigned b;
     // d of voxel j (0: not reached) and, when reached, its kept segment.
     std::uint32_t get(std::size_t j, std::uint32_t& kept) const {
-      const std::uint32_t l = labels[j];
-      if (l < S) return 0;
-      const std::uint32_t d = l / S;
-      kept = l - d * S;
+      const std::uint32_t l = labels[j], d = l >> b;
+      kept = l & ((std::uint32_t(1) << b) - 1);
       return d;
     }
-    void set(std::size_t j, std::uint32_t d, std::uint32_t kept) { labels[j] = kept + d * S; }
+    void set(std::size_t j, std::uint32_t d, std::uint32_t kept) { labels[j] = kept | d << b; }
   };
   struct ArrayMarks {
     std::uint32_t* labels;
@@ -349,8 +348,10 @@ class Grouper {
 
   void proximity(bool from_unknown) {
     const std::uint64_t S = segs_.size();
-    if (S * (static_cast<std::uint64_t>(p_.object_gap) + 1) <= std::numeric_limits<std::uint32_t>::max()) {
-      LabelMarks m{labels_.data(), static_cast<std::uint32_t>(S)};
+    unsigned b = 0;
+    while ((std::uint64_t(1) << b) < S) ++b;
+    if ((static_cast<std::uint64_t>(p_.object_gap) + 1) << b <= std::uint64_t(1) << 32) {
+      LabelMarks m{labels_.data(), b};
       proximity(from_unknown, m);
     } else {
       ArrayMarks m(labels_.data(), labels_.size());
