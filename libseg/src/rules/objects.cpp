@@ -105,8 +105,10 @@ class Grouper {
       for (std::size_t z = 0; z < nz; ++z)
         for (std::size_t y = 0; y < ny; ++y) {
           const std::size_t row = nx * (y + ny * z);
-          for (std::size_t x = 0; x < nx; ++x)
-            if (want[labels_[row + x]]) fn(row + x, x, y, z);
+          for (std::size_t x = 0; x < nx; ++x) {
+            const std::uint32_t l = labels_[row + x];
+            if (l < want.size() && want[l]) fn(row + x, x, y, z);  // (rule 6's marked labels are >= S)
+          }
         }
       return;
     }
@@ -311,37 +313,73 @@ class Grouper {
   //     the groups are exactly the closure of "a path of at most object_gap unknown voxels",
   //     whichever segment a tie kept and in whatever order the seeds were found.
   // The labels of the voxels searched (and, found from the occupied side, of every seed) hold the
-  // kept segment during the search and get theirs back after it.
-  void proximity(bool from_unknown) {
-    const std::size_t S = segs_.size(), n = labels_.size();
-    const int gap = p_.object_gap;
-    // d per voxel, 0: not reached; allocated when a search needs it. Zeroed pages come from the
-    // system as the search touches them.
-    std::unique_ptr<std::uint8_t, void (*)(void*)> dist(nullptr, std::free);
-    const auto distances = [&] {
-      dist.reset(static_cast<std::uint8_t*>(std::calloc(n, 1)));
+  // kept segment and their d during the search, as kept | d << b (LabelMarks: 2^b >= S segments,
+  // d at most object_gap <= 16, so it fits 32 bits unless S is above about 2^27, when d has an
+  // array of its own, ArrayMarks), and get theirs back after it. Marked labels are at least 2^b
+  // >= S, so no scan takes them for a segment's; and no scratch the size of the map is allocated
+  // and cleared.
+  struct LabelMarks {
+    std::uint32_t* labels;
+    unsigned b;
+    // d of voxel j (0: not reached) and, when reached, its kept segment.
+    std::uint32_t get(std::size_t j, std::uint32_t& kept) const {
+      const std::uint32_t l = labels[j], d = l >> b;
+      kept = l & ((std::uint32_t(1) << b) - 1);
+      return d;
+    }
+    void set(std::size_t j, std::uint32_t d, std::uint32_t kept) { labels[j] = kept | d << b; }
+  };
+  struct ArrayMarks {
+    std::uint32_t* labels;
+    std::unique_ptr<std::uint8_t, void (*)(void*)> dist;
+    explicit ArrayMarks(std::uint32_t* l, std::size_t n) : labels(l), dist(static_cast<std::uint8_t*>(std::calloc(n, 1)), std::free) {
       if (!dist) throw std::bad_alloc();
-      return dist.get();
-    };
-    std::uint8_t* d = nullptr;
+    }
+    std::uint32_t get(std::size_t j, std::uint32_t& kept) const {
+      const std::uint32_t d = dist.get()[j];
+      if (d) kept = labels[j];
+      return d;
+    }
+    void set(std::size_t j, std::uint32_t d, std::uint32_t kept) {
+      dist.get()[j] = static_cast<std::uint8_t>(d);
+      labels[j] = kept;
+    }
+  };
+
+  void proximity(bool from_unknown) {
+    const std::uint64_t S = segs_.size();
+    unsigned b = 0;
+    while ((std::uint64_t(1) << b) < S) ++b;
+    if ((static_cast<std::uint64_t>(p_.object_gap) + 1) << b <= std::uint64_t(1) << 32) {
+      LabelMarks m{labels_.data(), b};
+      proximity(from_unknown, m);
+    } else {
+      ArrayMarks m(labels_.data(), labels_.size());
+      proximity(from_unknown, m);
+    }
+  }
+
+  template <typename Marks>
+  void proximity(bool from_unknown, Marks& m) {
+    const std::size_t S = segs_.size();
+    const int gap = p_.object_gap;
     // (voxel whose label holds a kept segment, its own label)
     std::vector<std::pair<std::uint32_t, std::uint32_t>> saved;
     if (!from_unknown) {
-      // From the occupied voxels: the first segment to reach a seed is kept. (Seeds hold an
-      // occupied segment's id meanwhile, so the scan must not take them for occupied voxels: d
-      // says which they are.)
-      d = distances();
+      // From the occupied voxels: the first segment to reach a seed is kept. (Seeds are marked
+      // meanwhile, so the scan must not take them for occupied voxels.)
       for_members(occ_, [&](std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
-        if (d[i]) return;
-        const std::uint32_t a = labels_[i];
+        std::uint32_t a = 0;
+        if (m.get(i, a)) return;
+        a = labels_[i];
         for_faces(i, x, y, z, [&](std::size_t j) {
-          if (d[j]) {
-            if (labels_[j] != a) unite(a, labels_[j]);
+          std::uint32_t k = 0;
+          if (m.get(j, k)) {
+            if (k != a) unite(a, k);
           } else if (unk_[labels_[j]]) {
-            d[j] = 1;
             seeds_.push_back({static_cast<std::uint32_t>(j), labels_[j], a});
             saved.push_back({static_cast<std::uint32_t>(j), labels_[j]});
-            labels_[j] = a;
+            m.set(j, 1, a);
           }
         });
       });
@@ -360,30 +398,29 @@ class Grouper {
       if (segs_[e.segment].voxels <= static_cast<std::uint64_t>(gap)) {
         unite(first[e.segment], e.kept);
       } else {
-        if (!d) d = distances();
-        if (from_unknown) {  // (from the occupied side the seeds' labels hold their kept segment already)
+        if (from_unknown) {  // (from the occupied side the seeds are marked already)
           saved.push_back({e.voxel, e.segment});
-          labels_[e.voxel] = e.kept;
+          m.set(e.voxel, 1, e.kept);
         }
-        d[e.voxel] = 1;
         next.push_back(e.voxel);
       }
     }
     seeds_ = std::vector<Seed>();
-    // Step 3 (the seeds of other unknown segments are never next to a voxel reached: their d, set
-    // by the search from the occupied side, is never read).
+    // Step 3 (the seeds of other unknown segments are never next to a voxel reached: their marks,
+    // set by the search from the occupied side, are never read).
     for (int depth = 1; depth < gap && !next.empty(); ++depth) {
       layer.swap(next);
       next.clear();
       for (const std::uint32_t u : layer) {
-        const std::uint32_t a = labels_[u];
+        std::uint32_t a = 0;
+        m.get(u, a);
         for_faces(u, [&](std::size_t j) {
-          if (d[j]) {
-            if (labels_[j] != a && depth + d[j] <= gap) unite(a, labels_[j]);
+          std::uint32_t k = 0;
+          if (const std::uint32_t dj = m.get(j, k)) {
+            if (k != a && depth + static_cast<int>(dj) <= gap) unite(a, k);
           } else if (depth + 1 < gap && unk_[labels_[j]]) {
-            d[j] = static_cast<std::uint8_t>(depth + 1);
             saved.push_back({static_cast<std::uint32_t>(j), labels_[j]});
-            labels_[j] = a;
+            m.set(j, static_cast<std::uint32_t>(depth + 1), a);
             next.push_back(static_cast<std::uint32_t>(j));
           }
         });
