@@ -134,6 +134,13 @@ const word_t* reach_rows(const Layout& L, const word_t* src, const std::vector<s
   return in;
 }
 
+// out = in OR-ed with its neighbours along y (one plane's row flags, ny of them).
+void or_y_neighbours(const std::uint8_t* in, std::uint8_t* out, std::size_t ny) {
+  std::copy(in, in + ny, out);
+  for (std::size_t y = 1; y < ny; ++y) out[y] |= in[y - 1];
+  for (std::size_t y = 0; y + 1 < ny; ++y) out[y] |= in[y + 1];
+}
+
 // The row kinds of every row within L1 distance r (in y and z) of it, OR-ed: r rounds of the
 // four neighbours within the map.
 std::vector<std::uint8_t> kinds_within(const Layout& L, const std::uint8_t* kinds, int r) {
@@ -143,9 +150,7 @@ std::vector<std::uint8_t> kinds_within(const Layout& L, const std::uint8_t* kind
     for (std::size_t z = 0; z < nz; ++z) {
       const std::uint8_t* const in = a.data() + z * ny;
       std::uint8_t* const out = b.data() + z * ny;
-      std::copy(in, in + ny, out);
-      for (std::size_t y = 1; y < ny; ++y) out[y] |= in[y - 1];
-      for (std::size_t y = 0; y + 1 < ny; ++y) out[y] |= in[y + 1];
+      or_y_neighbours(in, out, ny);
       if (z > 0) {
         const std::uint8_t* const below = in - ny;  // (in[y - ny] would wrap the unsigned index)
         for (std::size_t y = 0; y < ny; ++y) out[y] |= below[y];
@@ -166,9 +171,7 @@ std::vector<std::uint8_t> rows_around(const Layout& L, const std::vector<std::ui
   for (std::size_t z = 0; z < nz; ++z) {
     const std::uint8_t* const in = flags.data() + z * ny;
     std::uint8_t* const out = a.data() + z * ny;
-    std::copy(in, in + ny, out);
-    for (std::size_t y = 1; y < ny; ++y) out[y] |= in[y - 1];
-    for (std::size_t y = 0; y + 1 < ny; ++y) out[y] |= in[y + 1];
+    or_y_neighbours(in, out, ny);
   }
   for (std::size_t z = 0; z < nz; ++z) {
     const std::uint8_t* const in = a.data() + z * ny;
