@@ -223,6 +223,52 @@ TEST(Objects, SmallUnknownPocketTouchingAnObjectJoinsIt) {
   s.expect_consistent_table();
 }
 
+// A speckle too far from the object for rules 6 and 7 (4 unknown voxels between them, gap 3),
+// whose pocket then joins the object: the speckle would lie against the object as clutter of its
+// own, so it joins with the pocket (found by fuzz_buffer).
+TEST(Objects, SpeckleBesideAPocketThatJoinsAnObjectJoinsItToo) {
+  Scene s({24, 20, 20}, [](int x, int y, int z) {
+    if (in_box(x, y, z, 12, 8, 8, 15, 9, 9)) return U;  // 16 unknown voxels against the object
+    if (in_box(x, y, z, 16, 8, 8, 16, 9, 8)) return O;  // 2 occupied voxels beyond them
+    if (in_box(x, y, z, 4, 5, 5, 11, 12, 12)) return O;
+    return F;
+  });
+  s.group(rules(3, 27, 64));
+  EXPECT_EQ(s.count(State::occupied), 1u);
+  EXPECT_EQ(s.segments.size(), 2u);
+  EXPECT_EQ(s.at(16, 8, 8), s.at(4, 5, 5));
+  EXPECT_EQ(s.at(13, 8, 8), s.at(4, 5, 5));
+  EXPECT_EQ(s.segments[s.at(4, 5, 5)].voxels, 512u + 16u + 2u);
+  EXPECT_EQ(s.segments[s.at(4, 5, 5)].kind, Kind::object);
+  s.expect_consistent_table();
+  // Without the pocket rule the speckle stays apart, as clutter: the join above is rule 8's.
+  Scene t({24, 20, 20}, [](int x, int y, int z) {
+    if (in_box(x, y, z, 12, 8, 8, 15, 9, 9)) return U;
+    if (in_box(x, y, z, 16, 8, 8, 16, 9, 8)) return O;
+    if (in_box(x, y, z, 4, 5, 5, 11, 12, 12)) return O;
+    return F;
+  });
+  t.group(rules(3, 27, 0));
+  EXPECT_EQ(t.count(State::occupied), 2u);
+  EXPECT_EQ(t.segments[t.at(16, 8, 8)].kind, Kind::clutter);
+}
+
+// A pocket between two objects joins the one it shares the most faces with; the other stays an
+// object of its own (two objects touching are not merged through a dent).
+TEST(Objects, PocketBetweenTwoObjectsJoinsOneOfThem) {
+  Scene s({30, 20, 20}, [](int x, int y, int z) {
+    if (in_box(x, y, z, 12, 7, 7, 13, 10, 10)) return U;  // 32 unknown voxels, 16 faces each side
+    if (in_box(x, y, z, 4, 5, 5, 11, 12, 12)) return O;   // 512 voxels
+    if (in_box(x, y, z, 14, 8, 8, 17, 9, 9)) return O;    // 16 voxels, 4 faces with the pocket
+    return F;
+  });
+  s.group(rules(0, 8, 64));
+  EXPECT_EQ(s.count(State::occupied), 2u);
+  EXPECT_EQ(s.at(12, 7, 7), s.at(4, 5, 5));
+  EXPECT_NE(s.at(14, 8, 8), s.at(4, 5, 5));
+  EXPECT_EQ(s.segments[s.at(14, 8, 8)].kind, Kind::object);
+}
+
 TEST(Objects, KindsFollowStatesAndSupportPlanes) {
   // A 30 x 30 floor with a box standing on it, free above: the floor is structure, the box an
   // object.

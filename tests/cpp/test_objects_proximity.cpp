@@ -10,6 +10,7 @@
 #include <deque>
 #include <limits>
 #include <map>
+#include <set>
 #include <numeric>
 
 #include "occseg/segment.hpp"
@@ -198,13 +199,22 @@ PlainGroups plain_rules(const Dims& d, const std::vector<std::uint8_t>& states, 
         if (st[labels[j]] == O) ++shared[g][find(labels[j])];
       });
     }
+    // The object of the most faces (a speckle, an occupied group left below min_object, only
+    // when the group touches nothing else); the speckles it touches join too, each once.
+    const auto speckle = [&](std::uint32_t o) { return min_object > 0 && size[o] < min_object; };
     std::vector<std::pair<std::uint32_t, std::uint32_t>> joins;
+    std::set<std::uint32_t> taken;
     for (const auto& [g, counts] : shared) {
       std::uint32_t to = 0;
       std::uint64_t most = 0;
       for (const auto& [o, c] : counts)  // in increasing id: ties keep the smaller
-        if (c > most) most = c, to = o;
+        if (!speckle(o) && c > most) most = c, to = o;
+      if (most == 0)
+        for (const auto& [o, c] : counts)
+          if (c > most) most = c, to = o;
       joins.push_back({g, to});
+      for (const auto& [o, c] : counts)
+        if (o != to && speckle(o) && taken.insert(o).second) joins.push_back({o, to});
     }
     for (const auto& j : joins) unite(j.first, j.second);
   }

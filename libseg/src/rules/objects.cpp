@@ -499,6 +499,14 @@ class Grouper {
         if (state_[s] == kUnknown && size[g] < min) member[at[g]++] = static_cast<std::uint32_t>(s);
       }
     }
+    // Rule 7's speckles that are left (occupied groups of fewer voxels than min_object_voxels, by
+    // its evidence count): a group that joins an object also takes the speckles it touches, which
+    // would otherwise lie against that object as clutter of their own (each speckle once: the
+    // first such group in id order takes it, so no speckle ties two objects together).
+    const std::uint64_t speckle_min = p_.min_object_voxels > 0 ? minimum_size(p_.min_object_voxels, d_) : 0;
+    const std::vector<std::uint64_t> occupied_size = speckle_min ? group_sizes(/*evidence=*/true) : std::vector<std::uint64_t>();
+    const auto speckle = [&](std::uint32_t root) { return speckle_min && occupied_size[root] < speckle_min; };
+    std::vector<char> taken(speckle_min ? segs_.size() : 0, 0);
     std::vector<std::pair<std::uint32_t, std::uint32_t>> joins;
     std::vector<std::pair<std::uint32_t, std::uint32_t>> faces;  // (occupied group, shared faces)
     for (std::size_t g = 0; g < segs_.size(); ++g) {
@@ -509,16 +517,23 @@ class Grouper {
           faces.push_back({groups_.find(faces_[f].occupied), faces_[f].count});
       if (faces.empty()) continue;
       std::sort(faces.begin(), faces.end());
-      // The group of the most faces; ties: the smaller id (the first in this order).
+      // The group of the most faces, a speckle only if the group touches nothing else; ties: the
+      // smaller id (the first in this order).
       std::uint32_t to = faces[0].first, most = 0;
+      bool to_speckle = true;
       for (std::size_t a = 0; a < faces.size();) {
         std::uint32_t count = 0;
         std::size_t b = a;
         for (; b < faces.size() && faces[b].first == faces[a].first; ++b) count += faces[b].second;
-        if (count > most) most = count, to = faces[a].first;
+        const bool small = speckle(faces[a].first);
+        if ((to_speckle && !small) || (small == to_speckle && count > most)) most = count, to = faces[a].first, to_speckle = small;
         a = b;
       }
       joins.push_back({static_cast<std::uint32_t>(g), to});
+      for (std::size_t a = 0; a < faces.size(); ++a) {
+        const std::uint32_t o = faces[a].first;
+        if (o != to && speckle(o) && !taken[o]) taken[o] = 1, joins.push_back({o, to});
+      }
     }
     // A joined group is occupied from now on (renumber: a group with an occupied member is).
     for (const auto& j : joins) unite(j.first, j.second);
