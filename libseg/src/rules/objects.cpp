@@ -507,9 +507,8 @@ class Grouper {
     // its evidence count): a group that joins an object also takes the speckles it touches, which
     // would otherwise lie against that object as clutter of their own (each speckle once: the
     // first such group in id order takes it, so no speckle ties two objects together).
-    // (The sizes of the occupied groups by rule 7's count, in the array of the sizes above, which
-    // are read no more: a noisy map has 250,000 segments, and the two arrays were 4 MB at the
-    // pipeline's peak.)
+    // (Their sizes by rule 7's count go in the array of the sizes above, read no more: the grouping
+    // runs at the pipeline's peak, with a segment table of hundreds of thousands on a noisy map.)
     const std::uint64_t speckle_min = p_.min_object_voxels > 0 ? minimum_size(p_.min_object_voxels, d_) : 0;
     if (speckle_min) group_sizes_into(size, /*evidence=*/true);
     const std::vector<std::uint64_t>& occupied_size = size;
