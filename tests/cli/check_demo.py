@@ -92,4 +92,11 @@ j = json.loads(r.stdout)
 assert j["dims"] == [96, 96, 32] and j["input"] == "simulated close scene" and "evaluation" in j, j.keys()
 assert len(j["evaluation"]["objects"]) == 2 and j["files"][-1] == "small/summary.json", j["files"]
 assert sorted(os.listdir(os.path.join(work, "small"))) == expected
+# The building takes its own defaults for what is not given (rings, 25 m range), as `simulate` does.
+r = run("demo", "--scene", "building", "--dims", "100", "75", "15", "--voxel-size", "0.2", "--out", "bldg", "--json")
+assert r.returncode == 0 and r.stderr == "", r.stderr
+with open(os.path.join(work, "bldg", "scene.json")) as f:
+    scene = json.load(f)
+assert scene["construction"] == "rings" and scene["sensor"]["max_range"] == 25.0, (scene["construction"], scene["sensor"])
+assert scene["dims"] == [100, 75, 15] and scene["voxel_size"] == 0.2, (scene["dims"], scene["voxel_size"])
 print("cli demo: all checks passed")

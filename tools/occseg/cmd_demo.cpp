@@ -34,7 +34,7 @@ struct DemoArgs {
   std::string out_dir = "occseg-out", scene = "cone", mode = "planar";
   std::uint64_t seed = 1;
   std::vector<std::size_t> dims{320, 320, 128};
-  double voxel_size = 0.04;
+  double voxel_size = 0.04, max_range = 8.0;  // (no --max-range: the building's default)
   PipelineArgs pipeline;
   ReportArgs report;
 };
@@ -59,7 +59,8 @@ std::string num(double v) {
 void print_demo_summary(std::ostream& os, RunReport rep, const sim::Scene& scene, const sim::Scores& scores,
                         const std::string& dir, double voxel_size) {
   rep.files.clear();  // listed with explanations below
-  os << "occseg demo: the paper's " << scene.name << " scene, simulated, segmented and scored\n";
+  const bool papers = scene.name == "cone" || scene.name == "cube" || scene.name == "cylinder";
+  os << "occseg demo: the " << (papers ? "paper's " : "") << scene.name << " scene, simulated, segmented and scored\n";
   print_summary(os, rep);
   os << "scores against the ground truth: voxel accuracy " << pct(scores.accuracy) << ", IoU free "
      << num(scores.iou[0]) << ", unknown " << num(scores.iou[1]) << ", occupied " << num(scores.iou[2])
@@ -87,7 +88,8 @@ int run(const DemoArgs& o) {
   params.progress = bar.segment_callback();
   const sim::Scene scene = sim::make_scene(o.scene, Dims{o.dims[0], o.dims[1], o.dims[2]}, o.voxel_size);
   sim::ScanConfig config;
-  config.mode = o.mode == "full3d" ? sim::ScanMode::full3d : sim::ScanMode::planar;
+  config.mode = o.mode == "full3d" ? sim::ScanMode::full3d : o.mode == "rings" ? sim::ScanMode::rings : sim::ScanMode::planar;
+  config.max_range = o.max_range;
   config.seed = o.seed;
   config.threads = o.pipeline.threads;
   config.progress = bar.callback("simulating scans");
@@ -204,17 +206,24 @@ Runner add_demo(CLI::App& app) {
   CLI::App* c = app.add_subcommand(
       "demo", "Simulate the paper's cone scene, segment and score it, write everything to ./occseg-out/ (the default)");
   c->add_option("--out,-o", o->out_dir, "output directory (default occseg-out; created if missing)");
-  c->add_option("--scene", o->scene, "cone (default), cube, cylinder (the paper's), close, table, doorway")
+  c->add_option("--scene", o->scene,
+                "cone (default), cube, cylinder (the paper's), close, table, doorway, building (its defaults: --dims "
+                "400 300 60 --voxel-size 0.05 --mode rings, 25 m range)")
       ->check(CLI::IsMember(sim::scene_names()));
   c->add_option("--seed", o->seed, "seed of the range noise (default 1)")->transform(whole_number(0, UINT64_MAX));
-  c->add_option("--mode", o->mode, "planar (the paper's stack of planar scans; default) or full3d")
-      ->check(CLI::IsMember({"planar", "full3d"}));
+  c->add_option("--mode", o->mode,
+                "planar (the paper's stack of planar scans; default), full3d or rings (a spinning multi-beam lidar)")
+      ->check(CLI::IsMember({"planar", "full3d", "rings"}));
   c->add_option("--dims", o->dims, "map size NX NY NZ in voxels (default 320 320 128)")->expected(3)
       ->transform(whole_number(1, std::size_t(1) << 40));
   c->add_option("--voxel-size", o->voxel_size, "voxel edge in metres (default 0.04)")->check(positive_number());
   add_pipeline_options(c, o->pipeline);
   add_report_options(c, o->report);
-  return [c, o]() -> int { return c->parsed() ? run(*o) : -1; };
+  return [c, o]() -> int {
+    if (!c->parsed()) return -1;
+    apply_scene_defaults(*c, o->scene, o->dims, o->voxel_size, o->mode, o->max_range);
+    return run(*o);
+  };
 }
 
 }  // namespace occseg::cli

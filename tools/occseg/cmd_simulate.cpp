@@ -29,16 +29,6 @@ struct SimulateOptions {
   int threads = 0;
 };
 
-// The building's own defaults for the options not given: a 20 x 15 x 3 m storey at 5 cm scanned
-// by spinning lidars that see across it (the other scenes keep the paper's room and sensor).
-void apply_scene_defaults(SimulateOptions& o, const CLI::App& c) {
-  if (o.scene != "building") return;
-  if (c.count("--dims") == 0) o.dims = {400, 300, 60};
-  if (c.count("--voxel-size") == 0) o.voxel_size = 0.05;
-  if (c.count("--mode") == 0) o.mode = "rings";
-  if (c.count("--max-range") == 0) o.max_range = 25.0;
-}
-
 sim::ScanMode scan_mode(const std::string& m) {
   return m == "full3d" ? sim::ScanMode::full3d : m == "rings" ? sim::ScanMode::rings : sim::ScanMode::planar;
 }
@@ -103,7 +93,7 @@ Runner add_simulate(CLI::App& app) {
   c->add_option("--threads", o->threads, "worker threads, 0 = all cores")->transform(whole_number(0, 1024));
   return [c, o]() -> int {
     if (!c->parsed()) return -1;
-    apply_scene_defaults(*o, *c);
+    apply_scene_defaults(*c, o->scene, o->dims, o->voxel_size, o->mode, o->max_range);
     return run(*o);
   };
 }

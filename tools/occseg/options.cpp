@@ -148,4 +148,17 @@ void add_report_options(CLI::App* c, ReportArgs& a, bool with_top) {
         ->transform(whole_number(0, 1000000));
 }
 
+void apply_scene_defaults(CLI::App& cmd, const std::string& scene, std::vector<std::size_t>& dims, double& voxel_size,
+                          std::string& mode, double& max_range) {
+  if (scene != "building") return;
+  const auto unset = [&](const char* name) {
+    const CLI::Option* o = cmd.get_option_no_throw(name);
+    return !o || o->count() == 0;
+  };
+  if (unset("--dims")) dims = {400, 300, 60};
+  if (unset("--voxel-size")) voxel_size = 0.05;
+  if (unset("--mode")) mode = "rings";
+  if (unset("--max-range")) max_range = 25.0;
+}
+
 }  // namespace occseg::cli

@@ -52,4 +52,11 @@ struct ReportArgs {
 // --json, --quiet and (with_top) --top.
 void add_report_options(CLI::App* cmd, ReportArgs& args, bool with_top = true);
 
+// A simulated scene's own defaults for the options a command line left unset (`occseg simulate`,
+// `occseg demo`): the building is a 20 x 15 x 3 m storey (400 x 300 x 60 voxels of 5 cm) scanned
+// by spinning lidars that see across it (rings, 25 m); the other scenes keep the paper's room and
+// sensor. An option the command lacks counts as unset.
+void apply_scene_defaults(CLI::App& cmd, const std::string& scene, std::vector<std::size_t>& dims, double& voxel_size,
+                          std::string& mode, double& max_range);
+
 }  // namespace occseg::cli
