@@ -88,7 +88,7 @@ int run(const DemoArgs& o) {
   params.progress = bar.segment_callback();
   const sim::Scene scene = sim::make_scene(o.scene, Dims{o.dims[0], o.dims[1], o.dims[2]}, o.voxel_size);
   sim::ScanConfig config;
-  config.mode = o.mode == "full3d" ? sim::ScanMode::full3d : o.mode == "rings" ? sim::ScanMode::rings : sim::ScanMode::planar;
+  config.mode = scan_mode(o.mode);
   config.max_range = o.max_range;
   config.seed = o.seed;
   config.threads = o.pipeline.threads;

@@ -29,10 +29,6 @@ struct SimulateOptions {
   int threads = 0;
 };
 
-sim::ScanMode scan_mode(const std::string& m) {
-  return m == "full3d" ? sim::ScanMode::full3d : m == "rings" ? sim::ScanMode::rings : sim::ScanMode::planar;
-}
-
 int run(const SimulateOptions& o) {
   install_interrupt_handlers();  // Ctrl-C stops the simulation at its next layer
   if (o.dims.size() != 3) throw Error(Status::invalid_argument, "--dims takes three numbers: NX NY NZ");

@@ -161,4 +161,8 @@ void apply_scene_defaults(CLI::App& cmd, const std::string& scene, std::vector<s
   if (unset("--max-range")) max_range = 25.0;
 }
 
+sim::ScanMode scan_mode(const std::string& name) {
+  return name == "full3d" ? sim::ScanMode::full3d : name == "rings" ? sim::ScanMode::rings : sim::ScanMode::planar;
+}
+
 }  // namespace occseg::cli

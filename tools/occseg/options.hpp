@@ -1,5 +1,6 @@
 // Options several subcommands share: the pipeline (--preset, --param, --threads), the input
-// (--voxel-size, --bbox, ... for map_input) and the report (--json, --quiet, --top).
+// (--voxel-size, --bbox, ... for map_input), the report (--json, --quiet, --top) and the
+// simulated scenes (`simulate`, `demo`).
 #pragma once
 #include <CLI/CLI.hpp>
 #include <string>
@@ -7,6 +8,7 @@
 
 #include "map_input.hpp"
 #include "occseg/params.hpp"
+#include "occseg/sim/scanner.hpp"
 
 namespace occseg::cli {
 
@@ -58,5 +60,7 @@ void add_report_options(CLI::App* cmd, ReportArgs& args, bool with_top = true);
 // sensor. An option the command lacks counts as unset.
 void apply_scene_defaults(CLI::App& cmd, const std::string& scene, std::vector<std::size_t>& dims, double& voxel_size,
                           std::string& mode, double& max_range);
+// The scan mode named by --mode (planar, full3d, rings; the option checks the name).
+sim::ScanMode scan_mode(const std::string& name);
 
 }  // namespace occseg::cli
