@@ -227,12 +227,13 @@ TEST(Objects, SmallUnknownPocketTouchingAnObjectJoinsIt) {
 // whose pocket then joins the object: the speckle would lie against the object as clutter of its
 // own, so it joins with the pocket (found by fuzz_buffer).
 TEST(Objects, SpeckleBesideAPocketThatJoinsAnObjectJoinsItToo) {
-  Scene s({24, 20, 20}, [](int x, int y, int z) {
+  const auto state = [](int x, int y, int z) {
     if (in_box(x, y, z, 12, 8, 8, 15, 9, 9)) return U;  // 16 unknown voxels against the object
     if (in_box(x, y, z, 16, 8, 8, 16, 9, 8)) return O;  // 2 occupied voxels beyond them
     if (in_box(x, y, z, 4, 5, 5, 11, 12, 12)) return O;
     return F;
-  });
+  };
+  Scene s({24, 20, 20}, state);
   s.group(rules(3, 27, 64));
   EXPECT_EQ(s.count(State::occupied), 1u);
   EXPECT_EQ(s.segments.size(), 2u);
@@ -242,12 +243,7 @@ TEST(Objects, SpeckleBesideAPocketThatJoinsAnObjectJoinsItToo) {
   EXPECT_EQ(s.segments[s.at(4, 5, 5)].kind, Kind::object);
   s.expect_consistent_table();
   // Without the pocket rule the speckle stays apart, as clutter: the join above is rule 8's.
-  Scene t({24, 20, 20}, [](int x, int y, int z) {
-    if (in_box(x, y, z, 12, 8, 8, 15, 9, 9)) return U;
-    if (in_box(x, y, z, 16, 8, 8, 16, 9, 8)) return O;
-    if (in_box(x, y, z, 4, 5, 5, 11, 12, 12)) return O;
-    return F;
-  });
+  Scene t({24, 20, 20}, state);
   t.group(rules(3, 27, 0));
   EXPECT_EQ(t.count(State::occupied), 2u);
   EXPECT_EQ(t.segments[t.at(16, 8, 8)].kind, Kind::clutter);

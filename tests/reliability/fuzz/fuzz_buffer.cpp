@@ -36,10 +36,17 @@ void require(bool ok) {
   if (!ok) std::abort();
 }
 
+// A bit of the import flags that is no occseg_import_flags value (the target sets it on purpose).
+constexpr std::uint32_t kNoFlag = 8;
+
+std::size_t item_size(int dtype) {
+  return dtype == OCCSEG_F64 ? 8 : dtype == OCCSEG_F32 ? 4 : dtype == OCCSEG_U16 ? 2 : 1;
+}
+
 // The probability the library must have stored for one element.
 double expected(const std::uint8_t* e, int t, std::uint32_t flags, bool* reject) {
   std::uint8_t swapped[8];
-  const std::size_t item = t == OCCSEG_F64 ? 8 : t == OCCSEG_F32 ? 4 : t == OCCSEG_U16 ? 2 : 1;
+  const std::size_t item = item_size(t);
   if (flags & OCCSEG_IMPORT_BYTE_SWAPPED) {  // (one-byte items have no byte order)
     for (std::size_t k = 0; k < item; ++k) swapped[k] = e[item - 1 - k];
     e = swapped;
@@ -144,10 +151,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   // those four (even fb / 5) or a bit that is no import flag, on purpose (odd).
   const std::uint8_t fb = in.byte();
   std::uint32_t flags = fb % 5;
-  if (flags == 4) flags = (fb / 5) % 2 ? 8u : OCCSEG_IMPORT_BYTE_SWAPPED | (fb / 10) % 4;
-  const int mode = in.byte() % 4;
-  const std::uint8_t preset_byte = in.byte();
-  const std::size_t item = dtype == OCCSEG_F64 ? 8 : dtype == OCCSEG_F32 ? 4 : dtype == OCCSEG_U16 ? 2 : 1;
+  if (flags == 4) flags = (fb / 5) % 2 ? kNoFlag : OCCSEG_IMPORT_BYTE_SWAPPED | (fb / 10) % 4;
+  const int mode = in.byte() % 4, preset = in.byte() % 2;
+  const std::size_t item = item_size(dtype);
   ptrdiff_t s[3];
   if (mode == 1) {  // Fortran order
     s[2] = item; s[1] = s[2] * dims[2]; s[0] = s[1] * dims[1];
@@ -176,13 +182,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   require((view_rc == OCCSEG_OK) == (view != nullptr));
   // Which failures are allowed, and that a valid request is not refused.
   const std::size_t n = dims[0] * dims[1] * dims[2];
-  const int preset = preset_byte % 2;
   if (rc != OCCSEG_OK) {
     require(!map && !copy_error.empty());
     require(rc == OCCSEG_EINVAL || rc == OCCSEG_EDIMS || rc == OCCSEG_EVALUE);
     if (rc == OCCSEG_EDIMS) require(n == 0);
     // Dense, Fortran and flipped views are valid; only arbitrary strides may overlap.
-    if (rc == OCCSEG_EINVAL) require(dtype > OCCSEG_I8_OCCUPANCY || (flags & 8) || mode == 3);
+    if (rc == OCCSEG_EINVAL) require(dtype > OCCSEG_I8_OCCUPANCY || (flags & kNoFlag) || mode == 3);
     if (rc == OCCSEG_EVALUE)
       require(((dtype == OCCSEG_F32 || dtype == OCCSEG_F64) && (flags & 3) != 3) || dtype == OCCSEG_I8_OCCUPANCY);
     if (rc != OCCSEG_EVALUE) {  // refused by its arguments: the view is refused alike
@@ -198,7 +203,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     occseg_map_free(view);
     return 0;
   }
-  require(map && view_rc == OCCSEG_OK && dtype <= OCCSEG_I8_OCCUPANCY && !(flags & 8) && n > 0);
+  require(map && view_rc == OCCSEG_OK && dtype <= OCCSEG_I8_OCCUPANCY && !(flags & kNoFlag) && n > 0);
   // Every voxel as the caller's buffer says.
   std::vector<float> values(n);
   require(occseg_map_values(map, values.data(), n) == OCCSEG_OK);
