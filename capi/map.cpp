@@ -424,12 +424,10 @@ Grid converted(const occseg_map* map, int threads) {
   return copy;
 }
 
-}  // namespace occseg::capi
-
-extern "C" {
-
-int occseg_map_from_buffer_flags(occseg_map** out, const void* data, occseg_dtype dtype, const size_t dims[3],
-                                 const ptrdiff_t strides[3], double voxel_size, uint32_t flags) {
+// occseg_map_from_buffer(_flags). The dtype is passed on by reference: a copy would read it as
+// the enum type, undefined for a value out of its range (UBSan's enum check; enum_value()).
+static int map_from_buffer(occseg_map** out, const void* data, const occseg_dtype& dtype, const size_t dims[3],
+                           const ptrdiff_t strides[3], double voxel_size, uint32_t flags) {
   return guard("occseg_map_from_buffer", [&] {
     auto m = checked_map(out, data, dtype, dims, strides, voxel_size, flags);
     occseg::resize_for_fill(m->grid.p, m->grid.dims.count(), 0);
@@ -437,6 +435,15 @@ int occseg_map_from_buffer_flags(occseg_map** out, const void* data, occseg_dtyp
     m->view = occseg_map::View();
     *out = m.release();
   });
+}
+
+}  // namespace occseg::capi
+
+extern "C" {
+
+int occseg_map_from_buffer_flags(occseg_map** out, const void* data, occseg_dtype dtype, const size_t dims[3],
+                                 const ptrdiff_t strides[3], double voxel_size, uint32_t flags) {
+  return occseg::capi::map_from_buffer(out, data, dtype, dims, strides, voxel_size, flags);
 }
 
 int occseg_map_view_buffer(occseg_map** out, const void* data, occseg_dtype dtype, const size_t dims[3],
@@ -451,7 +458,7 @@ int occseg_map_view_buffer(occseg_map** out, const void* data, occseg_dtype dtyp
 
 int occseg_map_from_buffer(occseg_map** out, const void* data, occseg_dtype dtype, const size_t dims[3],
                            const ptrdiff_t strides[3], double voxel_size) {
-  return occseg_map_from_buffer_flags(out, data, dtype, dims, strides, voxel_size, OCCSEG_IMPORT_STRICT);
+  return occseg::capi::map_from_buffer(out, data, dtype, dims, strides, voxel_size, OCCSEG_IMPORT_STRICT);
 }
 
 // By extension, through the registry (capi/plugins.cpp): .npy and .nrrd are built-in plugins.

@@ -24,7 +24,9 @@ function(occseg_add_plugin target)
   target_include_directories(${target} PRIVATE $<TARGET_PROPERTY:occseg::occseg,INTERFACE_INCLUDE_DIRECTORIES>)
   set_target_properties(${target} PROPERTIES PREFIX "" C_VISIBILITY_PRESET hidden CXX_VISIBILITY_PRESET hidden
                                              VISIBILITY_INLINES_HIDDEN ON)
-  if(NOT OCCSEG_SANITIZE_FLAGS)  # sanitizer runtimes are only linked into programs (clang)
+  # Sanitizer runtimes are only linked into programs (clang): a build against a sanitized occseg
+  # sets OCCSEG_SANITIZE_FLAGS (the occseg build's own variable; tests/c/build_outside.cmake).
+  if(NOT OCCSEG_SANITIZE_FLAGS)
     target_link_options(${target} PRIVATE -Wl,--no-undefined)
   endif()
   if(ARG_INSTALL)

@@ -9,8 +9,9 @@ export PKG_CONFIG_PATH="$prefix/$libdir/pkgconfig"
 flags=$(pkg-config --cflags --libs occseg-octomap)
 echo "pkg-config --cflags --libs occseg-octomap: $flags"
 case "$flags" in *"-I$prefix/include"*"-loccseg_octomap"*) ;; *) echo "flags do not point into $prefix"; exit 1 ;; esac
+# (OCCSEG_CXX, OCCSEG_EXTRA_CFLAGS: a sanitizer build's compiler and flags; see pkg_config_build.sh)
 # shellcheck disable=SC2086
-g++ -std=c++17 -Wall -Wextra "$src" -o "$work/octomap_app" $flags ${OCCSEG_EXTRA_CFLAGS:-} -Wl,-rpath,"$prefix/$libdir"
+"${OCCSEG_CXX:-g++}" -std=c++17 -Wall -Wextra "$src" -o "$work/octomap_app" $flags ${OCCSEG_EXTRA_CFLAGS:-} -Wl,-rpath,"$prefix/$libdir"
 "$work/octomap_app" "$work/segments.ot" | tee "$work/output.txt"
 grep -q "^grid 3 x 1 x 1, segments.ot: 3 leaves of 0.1 m$" "$work/output.txt"
 deps=$(ldd "$work/octomap_app")

@@ -10,9 +10,10 @@ version=$(pkg-config --modversion occseg)
 flags=$(pkg-config --cflags --libs occseg)
 echo "pkg-config --cflags --libs occseg: $flags"
 case "$flags" in *"-I$prefix/include"*) ;; *) echo "cflags do not point into $prefix"; exit 1 ;; esac
-# OCCSEG_EXTRA_CFLAGS: the sanitizer flags in a sanitizer build (a sanitized library needs them).
+# OCCSEG_EXTRA_CFLAGS: the sanitizer flags in a sanitizer build (a sanitized library needs them);
+# OCCSEG_CC: the build's own C compiler there (its sanitizer runtime is the library's).
 # shellcheck disable=SC2086
-cc -std=c99 -Wall -Wextra -pedantic -Werror "$src" -o "$work/example" $flags ${OCCSEG_EXTRA_CFLAGS:-}
+"${OCCSEG_CC:-cc}" -std=c99 -Wall -Wextra -pedantic -Werror "$src" -o "$work/example" $flags ${OCCSEG_EXTRA_CFLAGS:-}
 LD_LIBRARY_PATH="$prefix/$libdir" "$work/example" > "$work/output.txt"
 cat "$work/output.txt"
 grep -q "^segment 1: occupied, 512 voxels, mop 0.90, bbox (12, 12, 12)-(19, 19, 19)$" "$work/output.txt"

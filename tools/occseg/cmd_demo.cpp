@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "format.hpp"
 #include "occseg/error.hpp"
 #include "occseg/file_write.hpp"
 #include "occseg/npy.hpp"
@@ -39,16 +40,6 @@ struct DemoArgs {
   ReportArgs report;
 };
 
-double since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-
-std::string pct(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.2f %%", 100 * v);
-  return b;
-}
-
 std::string num(double v) {
   char b[32];
   std::snprintf(b, sizeof b, "%.3f", v);
@@ -62,10 +53,10 @@ void print_demo_summary(std::ostream& os, RunReport rep, const sim::Scene& scene
   const bool papers = scene.name == "cone" || scene.name == "cube" || scene.name == "cylinder";
   os << "occseg demo: the " << (papers ? "paper's " : "") << scene.name << " scene, simulated, segmented and scored\n";
   print_summary(os, rep);
-  os << "scores against the ground truth: voxel accuracy " << pct(scores.accuracy) << ", IoU free "
+  os << "scores against the ground truth: voxel accuracy " << percent(scores.accuracy) << ", IoU free "
      << num(scores.iou[0]) << ", unknown " << num(scores.iou[1]) << ", occupied " << num(scores.iou[2])
-     << "; object voxels labelled free " << pct(scores.object_free_share) << ", unknown voxels labelled free "
-     << pct(scores.unknown_free_share) << "\n";
+     << "; object voxels labelled free " << percent(scores.object_free_share) << ", unknown voxels labelled free "
+     << percent(scores.unknown_free_share) << "\n";
   const std::string d = dir + "/";
   os << "\nLook at " << d << "segmentation.png first. Everything is in " << d << ":\n"
      << "  segmentation.png   slices through the map, the segments and the ideal state\n"
@@ -99,18 +90,18 @@ int run(const DemoArgs& o) {
   std::vector<StageTime> steps;
   auto t = std::chrono::steady_clock::now();
   const Grid map = sim::simulate_map(scene, config);
-  steps.push_back({"simulate", since(t)});
+  steps.push_back({"simulate", seconds_since(t)});
   bar.update("ground truth", 0);
   t = std::chrono::steady_clock::now();
   const sim::Truth truth = sim::ground_truth(scene, config);
-  steps.push_back({"ground truth", since(t)});
+  steps.push_back({"ground truth", seconds_since(t)});
   check_interrupted();
   const Result r = segment(map, params);
   steps.insert(steps.end(), r.timings.begin(), r.timings.end());
   bar.update("scoring", 0);
   t = std::chrono::steady_clock::now();
   const sim::Scores scores = sim::score_segmentation(truth, r.labels, segment_states(r));
-  steps.push_back({"evaluate", since(t)});
+  steps.push_back({"evaluate", seconds_since(t)});
   check_interrupted();
 
   t = std::chrono::steady_clock::now();
@@ -174,7 +165,7 @@ int run(const DemoArgs& o) {
   rep.grid = &map;
   rep.result = &r;
   rep.top = o.report.top;
-  steps.push_back({"write", since(t)});
+  steps.push_back({"write", seconds_since(t)});
   rep.steps = steps;
   rep.files = out.files();
   nlohmann::json summary = summary_json(rep);

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "format.hpp"
 #include "options.hpp"
 #include "stages/label.hpp"
 #include "occseg/error.hpp"
@@ -39,21 +40,8 @@ struct FiguresOptions {
   bool pictures = true;
 };
 
-std::string pct(double v) {
-  std::ostringstream o;
-  o.setf(std::ios::fixed);
-  o.precision(2);
-  o << 100 * v;
-  return o.str();
-}
-
-std::string num(double v, int digits) {
-  std::ostringstream o;
-  o.setf(std::ios::fixed);
-  o.precision(digits);
-  o << v;
-  return o.str();
-}
+// A share as a percentage, without the sign (the tables' headers carry it).
+std::string pct(double v) { return fixed(100 * v, 2); }
 
 // One markdown row per method.
 std::string table_row(const std::string& scene, const std::string& method, const sim::Scores& s) {
@@ -65,8 +53,8 @@ std::string table_row(const std::string& scene, const std::string& method, const
     found += sep + pct(o.surface ? double(o.surface_found) / double(o.surface) : 0.0);
   }
   std::ostringstream r;
-  r << "| " << scene << " | " << method << " | " << pct(s.accuracy) << " | " << num(s.iou[0], 3) << " | "
-    << num(s.iou[1], 3) << " | " << num(s.iou[2], 3) << " | " << pct(s.object_free_share) << " | "
+  r << "| " << scene << " | " << method << " | " << pct(s.accuracy) << " | " << fixed(s.iou[0], 3) << " | "
+    << fixed(s.iou[1], 3) << " | " << fixed(s.iou[2], 3) << " | " << pct(s.object_free_share) << " | "
     << pct(s.unknown_free_share) << " | " << s.segments << " (" << s.segments_by_state[0] << "/"
     << s.segments_by_state[1] << "/" << s.segments_by_state[2] << ") | " << segs << " | " << largest << " | " << found
     << " | " << s.spanning_segments << " |\n";

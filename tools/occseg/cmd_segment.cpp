@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "format.hpp"
 #include "occseg/error.hpp"
 #include "occseg/file_write.hpp"
 #include "occseg/map_yaml.hpp"
@@ -49,10 +50,6 @@ struct SegmentArgs {
   InputArgs in;
   ReportArgs report;
 };
-
-double since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
 
 std::string base_name(const std::string& path) {
   const std::size_t slash = path.find_last_of('/');
@@ -246,7 +243,7 @@ int run(const SegmentArgs& o) {
   auto t = std::chrono::steady_clock::now();
   bar.update("reading " + base_name(o.input), 0);
   const MapInput input = load_map(o.input, in);
-  steps.push_back({"read", since(t)});
+  steps.push_back({"read", seconds_since(t)});
   check_interrupted();
   const Grid& grid = input.grid;
   const Result r = segment(grid, params);
@@ -407,7 +404,7 @@ int run(const SegmentArgs& o) {
     const bool written = std::any_of(chosen.begin(), chosen.end(), [&](const Output* f) { return f->name == info.name; });
     if (!written && is_regular_file(p) && !same_file(p, o.input)) out.remove(info.name);
   }
-  steps.push_back({"write", since(t)});
+  steps.push_back({"write", seconds_since(t)});
 
   RunReport rep;
   rep.input = o.input;

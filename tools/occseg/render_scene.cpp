@@ -172,7 +172,9 @@ bool for_each_visible(const Dims& d, const std::uint32_t* cells, const RowRanges
   for (std::size_t z = 0; z < d.nz; ++z) {
     const bool top_layer = z + 1 == d.nz;
     for (std::size_t y = d.ny; y-- > 0;) {
-      const std::uint32_t* row = cells + nx * y + plane * z;
+      // (An index, not a row pointer: `row[x - nx]` would add a wrapped unsigned offset to the
+      // pointer, undefined behaviour that UBSan reports.)
+      const std::size_t row = nx * y + plane * z;
       std::size_t x_lo = 0, x_end = nx;  // x in [x_lo, x_end)
       if (!ranges.empty()) {
         const std::size_t i = y + d.ny * z;
@@ -180,10 +182,11 @@ bool for_each_visible(const Dims& d, const std::uint32_t* cells, const RowRanges
         x_lo = ranges.lo[i], x_end = std::size_t(ranges.hi[i]) + 1;
       }
       for (std::size_t x = x_end; x-- > x_lo;) {
-        const std::uint32_t l = row[x];
+        const std::size_t i = row + x;
+        const std::uint32_t l = cells[i];
         if (!shown(l)) continue;
-        const unsigned faces = (top_layer || !shown(row[x + plane]) ? 1u : 0u) |
-                               (y == 0 || !shown(row[x - nx]) ? 2u : 0u) | (x == 0 || !shown(row[x - 1]) ? 4u : 0u);
+        const unsigned faces = (top_layer || !shown(cells[i + plane]) ? 1u : 0u) |
+                               (y == 0 || !shown(cells[i - nx]) ? 2u : 0u) | (x == 0 || !shown(cells[i - 1]) ? 4u : 0u);
         if (faces && !visit(x, y, z, l, faces)) return false;
       }
     }

@@ -6,6 +6,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "format.hpp"
 #include "render_png.hpp"
 #include "render_scene.hpp"
 
@@ -28,12 +29,6 @@ int metric_digits(const Grid& g) {
   digits = std::max(digits, need(g.voxel_size));
   for (double o : g.origin) digits = std::max(digits, need(o));
   return digits;
-}
-
-std::string fixed(double v, int digits) {
-  std::ostringstream o;
-  o << std::fixed << std::setprecision(digits) << (std::fabs(v) < 0.5 * std::pow(10.0, -digits) ? 0.0 : v);
-  return o.str();
 }
 
 std::string triple(const std::array<double, 3>& v, int digits, const char* sep = ", ") {

@@ -10,6 +10,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "format.hpp"
 #include "occseg/error.hpp"
 #include "occseg/file_read.hpp"
 #include "occseg/file_write.hpp"
@@ -55,12 +56,6 @@ std::vector<std::uint32_t> read_integer_volume(const std::string& path, Dims* di
     for (std::size_t y = 0; y < d.ny; ++y)
       for (std::size_t x = 0; x < d.nx; ++x, ++i) out[i] = value(a.fortran_order ? z + d.nz * (y + d.ny * x) : i);
   return out;
-}
-
-std::string fixed(double v, int digits) {
-  std::ostringstream o;
-  o << std::fixed << std::setprecision(digits) << v;
-  return o.str();
 }
 
 std::string object_name(const std::vector<std::string>& names, std::uint16_t id) {
@@ -271,12 +266,11 @@ std::string scores_table(const std::vector<std::string>& methods, const std::vec
     for (const sim::Scores& s : scores) cells.push_back(cell(s));
     rows.emplace_back(label, cells);
   };
-  auto pct = [](double v) { return fixed(100 * v, 2) + " %"; };
-  row("voxel accuracy", [&](const sim::Scores& s) { return pct(s.accuracy); });
+  row("voxel accuracy", [&](const sim::Scores& s) { return percent(s.accuracy); });
   const char* st[3] = {"free", "unknown", "occupied"};
   for (int k = 0; k < 3; ++k) row(std::string("IoU ") + st[k], [&](const sim::Scores& s) { return fixed(s.iou[k], 3); });
-  row("object voxels labelled free", [&](const sim::Scores& s) { return pct(s.object_free_share); });
-  row("unknown voxels labelled free", [&](const sim::Scores& s) { return pct(s.unknown_free_share); });
+  row("object voxels labelled free", [&](const sim::Scores& s) { return percent(s.object_free_share); });
+  row("unknown voxels labelled free", [&](const sim::Scores& s) { return percent(s.unknown_free_share); });
   row("segments (free/unk/occ)", [&](const sim::Scores& s) {
     return std::to_string(s.segments) + " (" + std::to_string(s.segments_by_state[0]) + "/" +
            std::to_string(s.segments_by_state[1]) + "/" + std::to_string(s.segments_by_state[2]) + ")";
@@ -287,10 +281,10 @@ std::string scores_table(const std::vector<std::string>& methods, const std::vec
     for (std::size_t k = 0; k < scores[0].objects.size(); ++k) {
       const std::string n = object_name(names, scores[0].objects[k].id);
       row(n + ": occupied segments", [&](const sim::Scores& s) { return std::to_string(s.objects[k].segments); });
-      row(n + ": share in largest segment", [&](const sim::Scores& s) { return pct(s.objects[k].largest_share); });
+      row(n + ": share in largest segment", [&](const sim::Scores& s) { return percent(s.objects[k].largest_share); });
       row(n + ": seen surface found", [&](const sim::Scores& s) {
         const auto& o = s.objects[k];
-        return pct(o.surface ? double(o.surface_found) / double(o.surface) : 0.0);
+        return percent(o.surface ? double(o.surface_found) / double(o.surface) : 0.0);
       });
     }
   std::size_t w0 = 0;
