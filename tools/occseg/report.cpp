@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <iomanip>
-#include <sstream>
 
 #include "format.hpp"
 #include "render_png.hpp"
