@@ -40,12 +40,6 @@ struct DemoArgs {
   ReportArgs report;
 };
 
-std::string num(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.3f", v);
-  return b;
-}
-
 // What the demo prints without --json: the summary, the scores and the files, explained.
 void print_demo_summary(std::ostream& os, RunReport rep, const sim::Scene& scene, const sim::Scores& scores,
                         const std::string& dir, double voxel_size) {
@@ -54,7 +48,7 @@ void print_demo_summary(std::ostream& os, RunReport rep, const sim::Scene& scene
   os << "occseg demo: the " << (papers ? "paper's " : "") << scene.name << " scene, simulated, segmented and scored\n";
   print_summary(os, rep);
   os << "scores against the ground truth: voxel accuracy " << percent(scores.accuracy) << ", IoU free "
-     << num(scores.iou[0]) << ", unknown " << num(scores.iou[1]) << ", occupied " << num(scores.iou[2])
+     << fixed(scores.iou[0], 3) << ", unknown " << fixed(scores.iou[1], 3) << ", occupied " << fixed(scores.iou[2], 3)
      << "; object voxels labelled free " << percent(scores.object_free_share) << ", unknown voxels labelled free "
      << percent(scores.unknown_free_share) << "\n";
   const std::string d = dir + "/";
