@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numeric>
 
 #include "occseg/parallel.hpp"
@@ -122,17 +123,38 @@ class Structure {
         if (c != ~0u) bucket[fill[c]++] = static_cast<std::uint32_t>(i);
       }
     }
-    for (std::size_t c = 0; c < candidates.size(); ++c) {
-      if (bucket.empty()) {
-        // The sample test first, by a scan of the box: a sprawling region of noise is rejected
-        // before its voxels are listed (a list of 4 bytes per voxel of most of a noisy map).
-        if (!has_surfaces_in_box(candidates[c])) continue;
-        list_members(candidates[c], listed_);
-        members_ = {listed_.data(), listed_.size()};
-      } else {
-        members_ = {bucket.data() + start[c], start[c + 1] - start[c]};
+    // The searches only read the labels and their own segment's entry, and a split relabels only
+    // the voxels of the segment it splits (to ids no other candidate has): so consecutive
+    // candidates are searched side by side, each by an examiner of its own, then split one after
+    // the other in order, exactly as one at a time. A batch holds candidates of at most
+    // max(largest candidate, map / 256) voxels together, so its examiners' scratch (about 80
+    // bytes per voxel examined) stays within the largest one's or a third of a byte per voxel.
+    const auto search_one = [&](Structure& e, std::size_t c) {
+      e.search(candidates[c], bucket.empty() ? nullptr : bucket.data() + start[c], start[c + 1] - start[c]);
+    };
+    std::size_t largest = 0;
+    for (const std::uint32_t c : candidates) largest = std::max<std::size_t>(largest, segs_[c].voxels);
+    const std::size_t budget = std::max(largest, labels_.size() / 256);
+    const bool parallel = resolve_threads(p_.threads) > 1;
+    for (std::size_t c0 = 0, c1; c0 < candidates.size(); c0 = c1) {
+      std::size_t sum = segs_[candidates[c0]].voxels;
+      for (c1 = c0 + 1; parallel && c1 < candidates.size() && sum + segs_[candidates[c1]].voxels <= budget; ++c1)
+        sum += segs_[candidates[c1]].voxels;
+      if (c1 == c0 + 1) {
+        search_one(*this, c0);
+        apply();
+        continue;
       }
-      examine(candidates[c]);
+      std::vector<std::unique_ptr<Structure>> batch(c1 - c0);
+      for (auto& e : batch) e = std::make_unique<Structure>(g_, labels_, segs_, p_, k_);
+      parallel_for_dynamic(batch.size(), p_.threads, [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i) search_one(*batch[i], c0 + i);
+      });
+      for (auto& e : batch) {
+        e->apply();
+        pieces_.insert(pieces_.end(), e->pieces_.begin(), e->pieces_.end());
+        e.reset();  // (its scratch back before the next split)
+      }
     }
     attract_fragments();
     if (out)
@@ -556,7 +578,40 @@ class Structure {
     return 100 * surface >= kMinSurfacePercent * k;
   }
 
-  void examine(std::uint32_t s) {
+  // Phase one of examining candidate s (reads only; apply() is phase two): its voxels are
+  // [bucket, bucket + count) when the caller bucketed them, else (bucket = nullptr) found by
+  // scanning its box after the sample test there.
+  void search(std::uint32_t s, const std::uint32_t* bucket, std::size_t count) {
+    s_ = s;
+    found_ = false;
+    if (!bucket) {
+      // The sample test first, by a scan of the box: a sprawling region of noise is rejected
+      // before its voxels are listed (a list of 4 bytes per voxel of most of a noisy map).
+      if (!has_surfaces_in_box(s)) return;
+      list_members(s, listed_);
+      members_ = {listed_.data(), listed_.size()};
+    } else {
+      members_ = {bucket, count};
+    }
+    examine(s, bucket != nullptr);
+  }
+
+  // Phase two: a segment with a structural piece is split; the pieces of one without still
+  // gather coplanar fragments.
+  void apply() {
+    if (!found_) return;
+    found_ = false;
+    if (!std::any_of(local_.begin(), local_.end(), [](const Piece& pc) { return pc.structural; })) {
+      pieces_.insert(pieces_.end(), local_.begin(), local_.end());
+      return;
+    }
+    segs_[s_].kind = Kind::structure;
+    split(s_, local_, piece_of_, axes_);
+  }
+
+  // The plane searches over segment s's voxels (members_); `sample`: whether the sample test is
+  // still to be made (has_surfaces_in_box() made it on the same voxels otherwise).
+  void examine(std::uint32_t s, bool sample) {
     const std::size_t n = members_.size();
     // Each voxel's possible orientations: axis a when the segment is thin along a through it
     // (thickness() at most max(4, object_gap + 2) voxels: a floor along z, a wall along its
@@ -568,7 +623,7 @@ class Structure {
     // A segment whose voxels are mostly thick along every axis (a sprawling region of noise) holds
     // no surfaces: judged on an evenly strided sample of at most 4096 of its voxels before any
     // work per voxel.
-    {
+    if (sample) {
       const std::size_t k = std::min<std::size_t>(n, 4096);
       std::size_t surface = 0;
       for (std::size_t i = 0; i < k; ++i) surface += thin_somewhere(s, coords(members_[i * n / k]));
@@ -600,9 +655,12 @@ class Structure {
         ++rows_[std::size_t(long(pts_[m][2]) - z0) * std::size_t(row_by_) + std::size_t(long(pts_[m][1]) - y0) + 1];
       for (std::size_t r = 1; r < rows_.size(); ++r) rows_[r] += rows_[r - 1];
     }
-    std::vector<std::int32_t> piece_of(n, -1);  // structural piece (index into local) or -1
-    std::vector<Piece> local;                   // this segment's pieces of >= min_plane voxels
-    std::vector<std::uint8_t> axes(n, 0);
+    std::vector<std::int32_t>& piece_of = piece_of_;  // structural piece (index into local) or -1
+    std::vector<Piece>& local = local_;               // this segment's pieces of >= min_plane voxels
+    std::vector<std::uint8_t>& axes = axes_;
+    piece_of.assign(n, -1);
+    local.clear();
+    axes.assign(n, 0);
     thin_axes(s, axes);
     // The rest: the voxels of the axis no plane holds yet (indices into pts_), and their
     // coordinates by axis (rx, ry, rz) for the fits, kept in step (compacted after each plane).
@@ -766,13 +824,7 @@ class Structure {
         piece_of[m] = static_cast<std::int32_t>(p);
       });
     }
-    const bool structural = std::any_of(local.begin(), local.end(), [](const Piece& pc) { return pc.structural; });
-    if (!structural) {  // unsplit: its pieces still gather coplanar fragments
-      pieces_.insert(pieces_.end(), local.begin(), local.end());
-      return;
-    }
-    segs_[s].kind = Kind::structure;
-    split(s, local, piece_of, axes);
+    found_ = true;
   }
 
   // The noise of a structural surface is structure: a voxel still of s (no piece's) within half
@@ -1077,6 +1129,13 @@ class Structure {
   std::vector<std::uint32_t> rows_;
   long row_y0_ = 0, row_z0_ = 0, row_by_ = 0, row_bz_ = 0;
   std::vector<Piece> pieces_;  // gather fragments: unsplit segments' pieces, structural pieces
+  // What search() found for apply(): the segment, each member's structural piece (index into
+  // local_) or -1, its pieces of >= min_plane voxels, each member's thin axes.
+  std::uint32_t s_ = 0;
+  bool found_ = false;
+  std::vector<std::int32_t> piece_of_;
+  std::vector<Piece> local_;
+  std::vector<std::uint8_t> axes_;
 };
 
 }  // namespace

@@ -61,8 +61,9 @@ struct PlanePiece {
 // removed, the order of the others kept).
 //
 // Nothing is done on a one-layer map (nz = 1). Statistics of changed segments are recomputed (in
-// scan order, or combined for joins as in rules/objects.hpp). One thread (the final relabelling
-// pass on params.threads): results never depend on params.threads or the kernels `k`.
+// scan order, or combined for joins as in rules/objects.hpp). The plane searches of consecutive
+// candidates run side by side on params.threads (then split one after the other, in order), and
+// the final relabelling pass too: results never depend on params.threads or the kernels `k`.
 // `pieces`, when given, receives the pieces that gathered fragments (in search order).
 void split_structure(const Grid& grid, LabelArray& labels, std::vector<Segment>& segments, const Params& params,
                      const kernels::Table& k = kernels::active(), std::vector<PlanePiece>* pieces = nullptr);
