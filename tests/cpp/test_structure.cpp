@@ -3,6 +3,7 @@
 // maps whose answer is known voxel by voxel.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <functional>
 #include <set>
 
@@ -204,6 +205,45 @@ TEST(Structure, ResultsIdenticalForAnyThreadCount) {
     p.threads = threads;
     s.run(p);
     labels.push_back(s.labels);
+  }
+  EXPECT_EQ(labels[0], labels[1]);
+  EXPECT_EQ(labels[0], labels[2]);
+}
+
+// Four copies of room_with_box, 2 x 2 across, under a tall free volume: four candidates small
+// against the map, so their plane searches run side by side (in batches of several) when there are
+// threads; each room comes out as the one room does, whatever the thread count.
+TEST(Structure, RoomsSearchedSideBySideComeOutAsOneRoomAlone) {
+  const auto rooms = [](int x, int y, int z) { return room_with_box(x % 40, y % 40, z); };
+  std::vector<LabelArray> labels;
+  for (int threads : {1, 2, 3}) {
+    Scene s({80, 80, 256}, 0.1, rooms);
+    Params p = structure_only();
+    p.threads = threads;
+    s.run(p);
+    labels.push_back(s.labels);
+    std::vector<std::uint32_t> boxes;
+    for (int ry : {0, 40})
+      for (int rx : {0, 40}) {
+        const std::set<std::uint32_t> shell = s.ids([&](int x, int y, int z) {
+          x -= rx, y -= ry;
+          return (z == 2 && in_box(x, y, z, 2, 2, 2, 37, 37, 2) && !in_box(x, y, z, 3, 15, 2, 8, 20, 2)) ||
+                 (x == 2 && in_box(x, y, z, 2, 2, 2, 2, 37, 27) && !in_box(x, y, z, 2, 15, 3, 2, 20, 9));
+        });
+        const std::set<std::uint32_t> box =
+            s.ids([&](int x, int y, int z) { return in_box(x - rx, y - ry, z, 4, 15, 4, 8, 20, 9); });
+        ASSERT_EQ(shell.size(), 1u) << threads << " threads, room " << rx << "," << ry;
+        ASSERT_EQ(box.size(), 1u) << threads << " threads, room " << rx << "," << ry;
+        EXPECT_EQ(s.segments[*shell.begin()].kind, Kind::structure);
+        EXPECT_EQ(s.segments[*box.begin()].kind, Kind::object);
+        boxes.push_back(*box.begin());
+      }
+    // Objects are numbered in the order of their first voxel (scan order: rooms along x, then y).
+    EXPECT_TRUE(std::is_sorted(boxes.begin(), boxes.end()));
+    EXPECT_EQ(std::set<std::uint32_t>(boxes.begin(), boxes.end()).size(), 4u);
+    std::size_t occupied = 0;
+    for (const Segment& seg : s.segments) occupied += seg.state == State::occupied;
+    EXPECT_EQ(occupied, 8u);
   }
   EXPECT_EQ(labels[0], labels[1]);
   EXPECT_EQ(labels[0], labels[2]);

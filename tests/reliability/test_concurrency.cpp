@@ -1,6 +1,7 @@
 // Concurrent use of the C ABI (run under ThreadSanitizer too): separate handles in separate
 // threads, one map and one parameter set shared by readers, per-thread error texts, the
 // progress callback's thread, and concurrent writers of one output path.
+#include <algorithm>
 #include <atomic>
 #include <cstring>
 #include <thread>
@@ -353,4 +354,49 @@ TEST(Concurrency, TheFirstSegmentationsOfAProcessMayStartTogether) {
     crashed += rc != 0;
   }
   EXPECT_EQ(crashed, 0) << "of 40 processes";
+}
+
+TEST(Concurrency, RuleElevenSearchesSideBySideMatchOneThread) {
+  // Four rooms (a 3.6 m floor, a 2.6 m wall, a box against both; 10 cm voxels) 2 x 2 across,
+  // 1.2 m apart, under a tall free volume: four structure candidates small against the map, whose
+  // plane searches run side by side on 2 threads (rules/structure.cpp). Under TSan this checks
+  // those searches share nothing they write; everywhere, that labels and kinds match one thread's.
+  const std::size_t d[3] = {96, 96, 192};
+  std::vector<float> p(d[0] * d[1] * d[2]);
+  for (std::size_t z = 0; z < d[2]; ++z)
+    for (std::size_t y = 0; y < d[1]; ++y)
+      for (std::size_t x = 0; x < d[0]; ++x) {
+        const std::size_t rx = x % 48, ry = y % 48;
+        const bool floor = z == 2 && rx >= 2 && rx <= 37 && ry >= 2 && ry <= 37;
+        const bool wall = rx == 2 && ry >= 2 && ry <= 37 && z >= 2 && z <= 27;
+        const bool box = rx >= 3 && rx <= 8 && ry >= 15 && ry <= 20 && z >= 3 && z <= 9;
+        p[x + d[0] * (y + d[1] * z)] = floor || wall || box ? 0.9f : (z < 2 || rx < 2 ? 0.5f : 0.1f);
+      }
+  occseg_map* map = nullptr;
+  ASSERT_EQ(occseg_map_from_buffer(&map, p.data(), OCCSEG_F32, d, nullptr, 0.1), OCCSEG_OK);
+  std::vector<std::uint32_t> labels[2];
+  std::vector<occseg_kind> kinds[2];
+  for (int t = 0; t < 2; ++t) {
+    occseg_params* params = nullptr;
+    ASSERT_EQ(occseg_params_create(&params), OCCSEG_OK);
+    ASSERT_EQ(occseg_params_set_int(params, "threads", t + 1), OCCSEG_OK);
+    occseg_result* r = nullptr;
+    ASSERT_EQ(occseg_segment(&r, map, params), OCCSEG_OK) << occseg_last_error();
+    labels[t].resize(p.size());
+    EXPECT_EQ(occseg_result_labels(r, labels[t].data(), p.size()), OCCSEG_OK);
+    for (std::uint32_t i = 0; i < occseg_result_segment_count(r); ++i) {
+      occseg_segment_info s;
+      std::memset(&s, 0, sizeof s);
+      s.struct_size = sizeof s;
+      EXPECT_EQ(occseg_result_segment(r, i, &s), OCCSEG_OK);
+      kinds[t].push_back(s.kind);
+    }
+    occseg_result_free(r);
+    occseg_params_free(params);
+  }
+  occseg_map_free(map);
+  EXPECT_EQ(std::count(kinds[0].begin(), kinds[0].end(), OCCSEG_KIND_STRUCTURE), 4);
+  EXPECT_EQ(std::count(kinds[0].begin(), kinds[0].end(), OCCSEG_KIND_OBJECT), 4);
+  EXPECT_TRUE(labels[0] == labels[1]);
+  EXPECT_TRUE(kinds[0] == kinds[1]);
 }
