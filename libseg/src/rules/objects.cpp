@@ -611,17 +611,25 @@ class Grouper {
         for (std::size_t i = b; i < e; ++i) labels_[i] = new_id[labels_[i]];
       });
     } else {
-      for (std::size_t s = 0; s < S; ++s) {
-        if (new_id[s] == s) continue;
-        const Segment& seg = segs_[s];
-        const std::uint32_t from = static_cast<std::uint32_t>(s), to = new_id[s];
-        for (std::size_t z = seg.bbox_min[2]; z <= seg.bbox_max[2]; ++z)
-          for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1]; ++y) {
-            std::uint32_t* row = labels_.data() + nx * (y + ny * z);
-            for (std::size_t x = seg.bbox_min[0]; x <= seg.bbox_max[0]; ++x)
-              if (row[x] == from) row[x] = to;
-          }
-      }
+      // The moved segments' boxes, in id order within each band of planes, the bands on the
+      // threads: a voxel is rewritten only by its own segment, to an id below every later one's
+      // (new_id[s] <= s), so a band ends as one pass over the map in id order leaves it.
+      std::vector<std::uint32_t> moved;
+      for (std::size_t s = 0; s < S; ++s)
+        if (new_id[s] != s) moved.push_back(static_cast<std::uint32_t>(s));
+      parallel_for_dynamic(nz, p_.threads, [&](std::size_t z0, std::size_t z1) {
+        for (const std::uint32_t from : moved) {
+          const Segment& seg = segs_[from];
+          const std::uint32_t to = new_id[from];
+          const std::size_t zb = std::min<std::size_t>(seg.bbox_max[2] + std::size_t{1}, z1);
+          for (std::size_t z = std::max<std::size_t>(seg.bbox_min[2], z0); z < zb; ++z)
+            for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1]; ++y) {
+              std::uint32_t* row = labels_.data() + nx * (y + ny * z);
+              for (std::size_t x = seg.bbox_min[0]; x <= seg.bbox_max[0]; ++x)
+                if (row[x] == from) row[x] = to;
+            }
+        }
+      });
     }
     segs_ = std::move(out);
   }

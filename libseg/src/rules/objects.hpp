@@ -25,8 +25,9 @@ namespace occseg {
 //    of fewer voxels that touches occupied voxels then joins the occupied group it shares the
 //    most faces with (ties: the smaller id).
 // A merged segment's mean occupancy, centroid and box are its members' combined in id order. The
-// visit of the unknown segments' and pockets' faces and the final relabelling pass run on
-// `params.threads` in fixed pieces, whose findings are taken in piece order; the groups are a
+// visit of the unknown segments' and pockets' faces and the final relabelling (one pass over the
+// map, or the moved segments' boxes band of planes by band) run on `params.threads` in fixed
+// pieces, whose findings are taken in piece order; the groups are a
 // closure and do not depend on the order of the joins: the result never depends on the threads.
 // `band_voxels` (per segment id, or nullptr): voxels the surface band (rules/surface_band.hpp)
 // added, which rule 7 leaves out of a group's size: the band is inferred from the surface beside
