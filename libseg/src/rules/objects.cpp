@@ -613,22 +613,35 @@ class Grouper {
     } else {
       // The moved segments' boxes, in id order within each band of planes, the bands on the
       // threads: a voxel is rewritten only by its own segment, to an id below every later one's
-      // (new_id[s] <= s), so a band ends as one pass over the map in id order leaves it.
-      std::vector<std::uint32_t> moved;
+      // (new_id[s] <= s), so a band ends as one pass over the map in id order leaves it. Each
+      // band lists the moved segments whose boxes reach it (in id order).
+      const std::size_t bands = std::min<std::size_t>(nz, 32);
+      std::vector<std::uint32_t> band_of(nz);
+      for (std::size_t b = 0; b < bands; ++b)
+        for (std::size_t z = b * nz / bands; z < (b + 1) * nz / bands; ++z) band_of[z] = static_cast<std::uint32_t>(b);
+      std::vector<std::vector<std::uint32_t>> in_band(bands);
       for (std::size_t s = 0; s < S; ++s)
-        if (new_id[s] != s) moved.push_back(static_cast<std::uint32_t>(s));
-      parallel_for_dynamic(nz, p_.threads, [&](std::size_t z0, std::size_t z1) {
-        for (const std::uint32_t from : moved) {
-          const Segment& seg = segs_[from];
-          const std::uint32_t to = new_id[from];
-          const std::size_t zb = std::min<std::size_t>(seg.bbox_max[2] + std::size_t{1}, z1);
-          for (std::size_t z = std::max<std::size_t>(seg.bbox_min[2], z0); z < zb; ++z)
-            for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1]; ++y) {
-              std::uint32_t* row = labels_.data() + nx * (y + ny * z);
-              for (std::size_t x = seg.bbox_min[0]; x <= seg.bbox_max[0]; ++x)
-                if (row[x] == from) row[x] = to;
-            }
-        }
+        if (new_id[s] != s && segs_[s].voxels > 0)  // (an empty one has no box)
+          for (std::size_t b = band_of[segs_[s].bbox_min[2]]; b <= band_of[segs_[s].bbox_max[2]]; ++b)
+            in_band[b].push_back(static_cast<std::uint32_t>(s));
+      std::uint32_t* const l = labels_.data();
+      parallel_for_dynamic(bands, p_.threads, [&](std::size_t b0, std::size_t b1) {
+        for (std::size_t b = b0; b < b1; ++b)
+          for (const std::uint32_t from : in_band[b]) {
+            // (The box in locals: the label stores could alias the table's 32-bit fields.)
+            const Segment& seg = segs_[from];
+            const std::uint32_t to = new_id[from];
+            const std::size_t x0 = seg.bbox_min[0], x1 = std::size_t{seg.bbox_max[0]} + 1, y0 = seg.bbox_min[1],
+                              y1 = std::size_t{seg.bbox_max[1]} + 1;
+            const std::size_t za = std::max<std::size_t>(seg.bbox_min[2], b * nz / bands),
+                              zb = std::min<std::size_t>(std::size_t{seg.bbox_max[2]} + 1, (b + 1) * nz / bands);
+            for (std::size_t z = za; z < zb; ++z)
+              for (std::size_t y = y0; y < y1; ++y) {
+                std::uint32_t* row = l + nx * (y + ny * z);
+                for (std::size_t x = x0; x < x1; ++x)
+                  if (row[x] == from) row[x] = to;
+              }
+          }
       });
     }
     segs_ = std::move(out);
