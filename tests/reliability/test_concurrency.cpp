@@ -43,9 +43,10 @@ struct Output {
   }
 };
 
-Output collect(const occseg_result* r) {
+// The labels of a map of `voxels` voxels (the blobs' by default) and the segment table.
+Output collect(const occseg_result* r, std::size_t voxels = kN * kN * kN) {
   Output o;
-  o.labels.resize(kN * kN * kN);
+  o.labels.resize(voxels);
   EXPECT_EQ(occseg_result_labels(r, o.labels.data(), o.labels.size()), OCCSEG_OK);
   for (std::uint32_t i = 0; i < occseg_result_segment_count(r); ++i) {
     occseg_segment_info s;
@@ -374,29 +375,23 @@ TEST(Concurrency, RuleElevenSearchesSideBySideMatchOneThread) {
       }
   occseg_map* map = nullptr;
   ASSERT_EQ(occseg_map_from_buffer(&map, p.data(), OCCSEG_F32, d, nullptr, 0.1), OCCSEG_OK);
-  std::vector<std::uint32_t> labels[2];
-  std::vector<occseg_kind> kinds[2];
+  Output out[2];
   for (int t = 0; t < 2; ++t) {
     occseg_params* params = nullptr;
     ASSERT_EQ(occseg_params_create(&params), OCCSEG_OK);
     ASSERT_EQ(occseg_params_set_int(params, "threads", t + 1), OCCSEG_OK);
     occseg_result* r = nullptr;
     ASSERT_EQ(occseg_segment(&r, map, params), OCCSEG_OK) << occseg_last_error();
-    labels[t].resize(p.size());
-    EXPECT_EQ(occseg_result_labels(r, labels[t].data(), p.size()), OCCSEG_OK);
-    for (std::uint32_t i = 0; i < occseg_result_segment_count(r); ++i) {
-      occseg_segment_info s;
-      std::memset(&s, 0, sizeof s);
-      s.struct_size = sizeof s;
-      EXPECT_EQ(occseg_result_segment(r, i, &s), OCCSEG_OK);
-      kinds[t].push_back(s.kind);
-    }
+    out[t] = collect(r, p.size());
     occseg_result_free(r);
     occseg_params_free(params);
   }
   occseg_map_free(map);
-  EXPECT_EQ(std::count(kinds[0].begin(), kinds[0].end(), OCCSEG_KIND_STRUCTURE), 4);
-  EXPECT_EQ(std::count(kinds[0].begin(), kinds[0].end(), OCCSEG_KIND_OBJECT), 4);
-  EXPECT_TRUE(labels[0] == labels[1]);
-  EXPECT_TRUE(kinds[0] == kinds[1]);
+  const auto kinds = [&](occseg_kind k) {
+    return std::count_if(out[0].segments.begin(), out[0].segments.end(),
+                         [k](const occseg_segment_info& s) { return s.kind == k; });
+  };
+  EXPECT_EQ(kinds(OCCSEG_KIND_STRUCTURE), 4);
+  EXPECT_EQ(kinds(OCCSEG_KIND_OBJECT), 4);
+  EXPECT_TRUE(out[0] == out[1]);  // labels, and every field of every segment
 }

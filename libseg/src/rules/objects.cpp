@@ -616,9 +616,10 @@ class Grouper {
       // (new_id[s] <= s), so a band ends as one pass over the map in id order leaves it. Each
       // band lists the moved segments whose boxes reach it (in id order).
       const std::size_t bands = std::min<std::size_t>(nz, 32);
+      const auto band_start = [&](std::size_t b) { return b * nz / bands; };  // band b: [start(b), start(b + 1))
       std::vector<std::uint32_t> band_of(nz);
       for (std::size_t b = 0; b < bands; ++b)
-        for (std::size_t z = b * nz / bands; z < (b + 1) * nz / bands; ++z) band_of[z] = static_cast<std::uint32_t>(b);
+        for (std::size_t z = band_start(b); z < band_start(b + 1); ++z) band_of[z] = static_cast<std::uint32_t>(b);
       std::vector<std::vector<std::uint32_t>> in_band(bands);
       for (std::size_t s = 0; s < S; ++s)
         if (new_id[s] != s && segs_[s].voxels > 0)  // (an empty one has no box)
@@ -633,8 +634,8 @@ class Grouper {
             const std::uint32_t to = new_id[from];
             const std::size_t x0 = seg.bbox_min[0], x1 = std::size_t{seg.bbox_max[0]} + 1, y0 = seg.bbox_min[1],
                               y1 = std::size_t{seg.bbox_max[1]} + 1;
-            const std::size_t za = std::max<std::size_t>(seg.bbox_min[2], b * nz / bands),
-                              zb = std::min<std::size_t>(std::size_t{seg.bbox_max[2]} + 1, (b + 1) * nz / bands);
+            const std::size_t za = std::max<std::size_t>(seg.bbox_min[2], band_start(b)),
+                              zb = std::min<std::size_t>(std::size_t{seg.bbox_max[2]} + 1, band_start(b + 1));
             for (std::size_t z = za; z < zb; ++z)
               for (std::size_t y = y0; y < y1; ++y) {
                 std::uint32_t* row = l + nx * (y + ny * z);

@@ -571,8 +571,7 @@ class Structure {
         const std::size_t row = g_.index(0, y, z), b = row + seg.bbox_min[0], e = row + seg.bbox_max[0] + 1;
         // A row without the next sample is only counted (a compare and add that vectorises): the
         // region of noise this test rejects fills a third of its box.
-        std::size_t members = 0;
-        for (const std::uint32_t* l = labels_.data() + b; l != labels_.data() + e; ++l) members += *l == s;
+        const auto members = static_cast<std::size_t>(std::count(labels_.data() + b, labels_.data() + e, s));
         if (seen + members <= next) {
           seen += members;
           continue;
