@@ -28,6 +28,7 @@ OFF = ["--param", "object_gap=0", "--param", "min_object_voxels=0", "--param", "
        "--param", "surface_band=0", "--param", "structure_planes=0", "--param", "plane_holes=0"]
 REAL = [("geb079.bt (native 8 cm)", "geb079.bt", []),
         ("office1.pcd at 2 cm", "office1.pcd", ["--voxel-size", "0.02"]),
+        ("office1.pcd at 1 cm", "office1.pcd", ["--voxel-size", "0.01"]),
         ("table scene at 1 cm", "table_scene_mug_stereo_textured.pcd", ["--voxel-size", "0.01"]),
         ("table scene at 2 cm", "table_scene_mug_stereo_textured.pcd", ["--voxel-size", "0.02"])]
 SCENES = ["cone", "cube", "cylinder", "close", "table", "doorway"]
