@@ -45,6 +45,15 @@ void check_xyz_fields(const std::string& path, const pcl::PCLPointCloud2& blob) 
   }
   const std::size_t n = std::size_t(blob.width) * blob.height;
   if (blob.data.size() < n * blob.point_step) bad_file(path, "data is shorter than WIDTH x HEIGHT points");
+  // pcl::fromPCLPointCloud2 reads row r at r x row_step. PCL's header parser sets row_step when it
+  // reads WIDTH and point_step from the fields as they stand at the end, so a header that lists
+  // its fields again after WIDTH (found by fuzz_pcd) leaves rows longer than the data.
+  if (std::size_t(blob.row_step) != std::size_t(blob.width) * blob.point_step)
+    bad_file(path, "its rows are " + std::to_string(blob.row_step) + " bytes apart, not WIDTH x " +
+                       std::to_string(blob.point_step) + " bytes (fields listed again after WIDTH?)");
+  for (const pcl::PCLPointField& f : blob.fields)
+    if (std::size_t(f.offset) + std::size_t(pcl::getFieldSize(f.datatype)) * f.count > blob.point_step)
+      bad_file(path, "field '" + printable(f.name) + "' lies past the end of its point");
 }
 
 // PCL's reader trusts the header (a file without fields or sizes crashes it), so the header

@@ -331,6 +331,26 @@ TEST(AbsurdHeaders, PcdBodyThatPclWouldReadAsHeaderIsRefused) {
   EXPECT_EQ(read_as("pcd", dir + "/fine.pcd").status, Status::ok) << read_as("pcd", dir + "/fine.pcd").message;
 }
 
+TEST(AbsurdHeaders, PcdFieldsListedAgainAfterWidthAreRefused) {
+  // PCL's header parser sets the row length when it reads WIDTH and the point size from the
+  // fields as they stand at the end: fields listed again after WIDTH, one of them with COUNT 0
+  // (which PCL drops), left rows of 13 bytes x 6 over 24 points of 12, and pcl::fromPCLPointCloud2
+  // read past the data (a heap overflow found by fuzz_pcd;
+  // tests/reliability/fuzz/regressions/pcd/fields-again-after-width).
+  const std::string dir = scratch("pcd_row_step");
+  const std::string fields = "FIELDS x y z i\nSIZE 4 4 4 1\nTYPE F F F U\n";
+  put(dir + "/again.pcd", "VERSION 0.7\n" + fields + "COUNT 1 1 1 1\nWIDTH 6\nHEIGHT 4\n" + fields +
+                              "COUNT 1 1 1 0\nPOINTS 24\nDATA binary\n" + std::string(24 * 13, '\0'));
+  const Outcome o = read_as("pcd", dir + "/again.pcd");
+  EXPECT_EQ(o.status, Status::format) << o.message;
+  EXPECT_NE(o.message.find("its rows are 78 bytes apart, not WIDTH x 12 bytes"), std::string::npos) << o.message;
+  EXPECT_NE(o.message.find(dir + "/again.pcd"), std::string::npos) << o.message;
+  // The same fields listed once read.
+  put(dir + "/once.pcd", "VERSION 0.7\n" + fields + "COUNT 1 1 1 1\nWIDTH 6\nHEIGHT 4\nPOINTS 24\nDATA binary\n" +
+                             std::string(24 * 13, '\0'));
+  EXPECT_EQ(read_as("pcd", dir + "/once.pcd").status, Status::ok) << read_as("pcd", dir + "/once.pcd").message;
+}
+
 TEST(AbsurdHeaders, PcdBtAndGraphCountsBeyondTheFileAreRefused) {
   const std::string dir = scratch("absurd_other");
   std::string pcd = slurp(kData + "/office1.pcd");
