@@ -14,6 +14,7 @@
 #include <cstring>
 #include <istream>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -46,8 +47,9 @@ void check_xyz_fields(const std::string& path, const pcl::PCLPointCloud2& blob) 
   const std::size_t n = std::size_t(blob.width) * blob.height;
   if (blob.data.size() < n * blob.point_step) bad_file(path, "data is shorter than WIDTH x HEIGHT points");
   // pcl::fromPCLPointCloud2 reads row r at r x row_step. PCL's header parser sets row_step when it
-  // reads WIDTH and point_step from the fields as they stand at the end, so a header that lists
-  // its fields again after WIDTH (found by fuzz_pcd) leaves rows longer than the data.
+  // reads WIDTH and point_step from the fields as they stand at the end: a header listing its
+  // fields again after WIDTH left rows longer than the data (found by fuzz_pcd). check_header
+  // refuses repeated keys; this holds whatever else makes PCL's parse differ from it.
   if (std::size_t(blob.row_step) != std::size_t(blob.width) * blob.point_step)
     bad_file(path, "its rows are " + std::to_string(blob.row_step) + " bytes apart, not WIDTH x " +
                        std::to_string(blob.point_step) + " bytes (fields listed again after WIDTH?)");
@@ -65,6 +67,7 @@ void check_header(const std::string& path, const std::string& bytes) {
   std::size_t nfields = 0, nsize = 0, ntype = 0, ncount = 0, point_bytes = 0, width = 0, height = 1, points = 0;
   std::vector<std::size_t> sizes, counts;
   bool have_width = false, have_points = false;
+  std::set<std::string> seen;  // the header keys met so far
   std::string line, data;
   for (int lines = 0; data.empty() && std::getline(in, line); ++lines) {
     if (lines > 1000) bad_file(path, "no DATA line in the first 1000 lines");
@@ -77,6 +80,13 @@ void check_header(const std::string& path, const std::string& bytes) {
     std::istringstream ls(line);
     std::string key, v;
     if (!(ls >> key) || key[0] == '#') continue;
+    // PCL acts on each header line as it comes (POINTS sizes its data, WIDTH its rows from the
+    // fields so far), so a key given twice leaves PCL's cloud unlike the one checked here (found by
+    // fuzz_pcd: a 40 GB allocation from a first POINTS line, rows past the data). No writer repeats one.
+    static const std::set<std::string> kKeys = {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT",
+                                                "WIDTH", "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
+    if (kKeys.count(key) && !seen.insert(key == "COLUMNS" ? "FIELDS" : key).second)
+      bad_file(path, "header field " + key + " is given twice (line " + std::to_string(lines + 1) + ")");
     std::vector<std::string> vals;
     while (ls >> v) vals.push_back(v);
     // PCL holds WIDTH, HEIGHT, POINTS and COUNT in 32 bits: a larger value cannot be meant.

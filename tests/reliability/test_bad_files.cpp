@@ -331,23 +331,34 @@ TEST(AbsurdHeaders, PcdBodyThatPclWouldReadAsHeaderIsRefused) {
   EXPECT_EQ(read_as("pcd", dir + "/fine.pcd").status, Status::ok) << read_as("pcd", dir + "/fine.pcd").message;
 }
 
-TEST(AbsurdHeaders, PcdFieldsListedAgainAfterWidthAreRefused) {
-  // PCL's header parser sets the row length when it reads WIDTH and the point size from the
-  // fields as they stand at the end: fields listed again after WIDTH, one of them with COUNT 0
-  // (which PCL drops), left rows of 13 bytes x 6 over 24 points of 12, and pcl::fromPCLPointCloud2
-  // read past the data (a heap overflow found by fuzz_pcd;
-  // tests/reliability/fuzz/regressions/pcd/fields-again-after-width).
-  const std::string dir = scratch("pcd_row_step");
+TEST(AbsurdHeaders, PcdHeaderKeysGivenTwiceAreRefused) {
+  // PCL acts on each header line as it comes. Fields listed again after WIDTH, one with COUNT 0
+  // (which PCL drops), left rows of 6 x 13 bytes over points of 12, and pcl::fromPCLPointCloud2
+  // read past the data (a heap overflow); a first POINTS line of 3333333333 made PCL allocate
+  // 40 GB before a second one said 24 (both found by fuzz_pcd;
+  // tests/reliability/fuzz/regressions/pcd/fields-again-after-width, points-twice).
+  const std::string dir = scratch("pcd_keys_twice");
   const std::string fields = "FIELDS x y z i\nSIZE 4 4 4 1\nTYPE F F F U\n";
-  put(dir + "/again.pcd", "VERSION 0.7\n" + fields + "COUNT 1 1 1 1\nWIDTH 6\nHEIGHT 4\n" + fields +
-                              "COUNT 1 1 1 0\nPOINTS 24\nDATA binary\n" + std::string(24 * 13, '\0'));
-  const Outcome o = read_as("pcd", dir + "/again.pcd");
-  EXPECT_EQ(o.status, Status::format) << o.message;
-  EXPECT_NE(o.message.find("its rows are 78 bytes apart, not WIDTH x 12 bytes"), std::string::npos) << o.message;
-  EXPECT_NE(o.message.find(dir + "/again.pcd"), std::string::npos) << o.message;
-  // The same fields listed once read.
-  put(dir + "/once.pcd", "VERSION 0.7\n" + fields + "COUNT 1 1 1 1\nWIDTH 6\nHEIGHT 4\nPOINTS 24\nDATA binary\n" +
-                             std::string(24 * 13, '\0'));
+  const std::string body(24 * 13, '\0');
+  const struct {
+    std::string name, text, key;
+    int line;
+  } cases[] = {
+      {"again.pcd", "VERSION 0.7\n" + fields + "COUNT 1 1 1 1\nWIDTH 6\nHEIGHT 4\n" + fields +
+                        "COUNT 1 1 1 0\nPOINTS 24\nDATA binary\n" + body, "FIELDS", 8},
+      {"points.pcd", "VERSION 0.7\n" + fields + "COUNT 1 1 1 1\nPOINTS 3333333333\nWIDTH 6\nHEIGHT 4\nPOINTS 24\n"
+                         "DATA binary\n" + body, "POINTS", 9},
+  };
+  for (const auto& c : cases) {
+    put(dir + "/" + c.name, c.text);
+    const Outcome o = read_as("pcd", dir + "/" + c.name);
+    EXPECT_EQ(o.status, Status::format) << c.name << ": " << o.message;
+    EXPECT_NE(o.message.find("header field " + c.key + " is given twice (line " + std::to_string(c.line) + ")"),
+              std::string::npos) << o.message;
+    EXPECT_NE(o.message.find(dir + "/" + c.name), std::string::npos) << o.message;
+  }
+  // Each key once: the file reads.
+  put(dir + "/once.pcd", "VERSION 0.7\n" + fields + "COUNT 1 1 1 1\nWIDTH 6\nHEIGHT 4\nPOINTS 24\nDATA binary\n" + body);
   EXPECT_EQ(read_as("pcd", dir + "/once.pcd").status, Status::ok) << read_as("pcd", dir + "/once.pcd").message;
 }
 
