@@ -9,10 +9,12 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <istream>
+#include <iterator>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -31,6 +33,10 @@ namespace {
 [[noreturn]] void bad_file(const std::string& path, const std::string& why) {
   throw Error(Status::format, "'" + path + "' is not a valid .pcd file: " + why);
 }
+
+// The keywords of a PCD header line, as PCL's header parser knows them.
+constexpr const char* kHeaderKeys[] = {"VERSION", "FIELDS", "COLUMNS",   "SIZE",   "TYPE", "COUNT",
+                                       "WIDTH",   "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
 
 // PCL reads x, y, z by name; a file without them as single float32 fields would give zeros.
 void check_xyz_fields(const std::string& path, const pcl::PCLPointCloud2& blob) {
@@ -52,7 +58,7 @@ void check_xyz_fields(const std::string& path, const pcl::PCLPointCloud2& blob) 
   // refuses repeated keys; this holds whatever else makes PCL's parse differ from it.
   if (std::size_t(blob.row_step) != std::size_t(blob.width) * blob.point_step)
     bad_file(path, "its rows are " + std::to_string(blob.row_step) + " bytes apart, not WIDTH x " +
-                       std::to_string(blob.point_step) + " bytes (fields listed again after WIDTH?)");
+                       std::to_string(blob.point_step) + " bytes");
   for (const pcl::PCLPointField& f : blob.fields)
     if (std::size_t(f.offset) + std::size_t(pcl::getFieldSize(f.datatype)) * f.count > blob.point_step)
       bad_file(path, "field '" + printable(f.name) + "' lies past the end of its point");
@@ -83,9 +89,9 @@ void check_header(const std::string& path, const std::string& bytes) {
     // PCL acts on each header line as it comes (POINTS sizes its data, WIDTH its rows from the
     // fields so far), so a key given twice leaves PCL's cloud unlike the one checked here (found by
     // fuzz_pcd: a 40 GB allocation from a first POINTS line, rows past the data). No writer repeats one.
-    static const std::set<std::string> kKeys = {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT",
-                                                "WIDTH", "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
-    if (kKeys.count(key) && !seen.insert(key == "COLUMNS" ? "FIELDS" : key).second)
+    const bool known =
+        std::any_of(std::begin(kHeaderKeys), std::end(kHeaderKeys), [&](const char* k) { return key == k; });
+    if (known && !seen.insert(key == "COLUMNS" ? "FIELDS" : key).second)
       bad_file(path, "header field " + key + " is given twice (line " + std::to_string(lines + 1) + ")");
     std::vector<std::string> vals;
     while (ls >> v) vals.push_back(v);
@@ -132,8 +138,7 @@ void check_header(const std::string& path, const std::string& bytes) {
     std::string word;
     ls >> word;
     if (!word.empty() && word[0] == '#') continue;
-    for (const char* key : {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT", "WIDTH", "HEIGHT", "VIEWPOINT",
-                            "POINTS", "DATA"})
+    for (const char* key : kHeaderKeys)
       if (word.compare(0, std::strlen(key), key) == 0)
         bad_file(path, "the data after the DATA line starts with '" + std::string(key) +
                            "', which PCL would read as a header line");
