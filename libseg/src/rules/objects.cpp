@@ -137,8 +137,10 @@ class Grouper {
           for (std::size_t z = b; z < e; ++z)
             for (std::size_t y = 0; y < ny; ++y) {
               const std::size_t row = nx * (y + ny * z);
-              for (std::size_t x = 0; x < nx; ++x)
-                if (want[labels_[row + x]]) fn(o, row + x, x, y, z);
+              for (std::size_t x = 0; x < nx; ++x) {
+                const std::uint32_t l = label_at(row + x);
+                if (l < want.size() && want[l]) fn(o, row + x, x, y, z);  // (rule 6's marked labels are >= S)
+              }
             }
         } else {
           for (std::size_t k = b; k < e; ++k)
@@ -156,9 +158,12 @@ class Grouper {
       for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1]; ++y) {
         const std::size_t row = nx * (y + ny * z);
         for (std::size_t x = seg.bbox_min[0]; x <= seg.bbox_max[0]; ++x)
-          if (labels_[row + x] == s) fn(row + x, x, y, z);
+          if (label_at(row + x) == s) fn(row + x, x, y, z);
       }
   }
+
+  // Voxel i's label, read atomically: rule 6 marks labels on the threads while others scan.
+  std::uint32_t label_at(std::size_t i) const { return __atomic_load_n(&labels_[i], __ATOMIC_RELAXED); }
 
   // Calls fn(j) for each 6-neighbour j of voxel i = (x, y, z) inside the map.
   template <typename Fn>
@@ -317,7 +322,9 @@ class Grouper {
   // d at most object_gap <= 16, so it fits 32 bits unless S is above about 2^27, when d has an
   // array of its own, ArrayMarks), and get theirs back after it. Marked labels are at least 2^b
   // >= S, so no scan takes them for a segment's; and no scratch the size of the map is allocated
-  // and cleared.
+  // and cleared. With marks in the labels, steps 1 (from the occupied side) and 3 run on the
+  // threads, each voxel marked by one compare-and-swap: which segment a voxel keeps may then
+  // depend on timing, the groups (the closure above) do not.
   struct LabelMarks {
     std::uint32_t* labels;
     unsigned b;
@@ -365,25 +372,7 @@ class Grouper {
     const int gap = p_.object_gap;
     // (voxel whose label holds a kept segment, its own label)
     std::vector<std::pair<std::uint32_t, std::uint32_t>> saved;
-    if (!from_unknown) {
-      // From the occupied voxels: the first segment to reach a seed is kept. (Seeds are marked
-      // meanwhile, so the scan must not take them for occupied voxels.)
-      for_members(occ_, [&](std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
-        std::uint32_t a = 0;
-        if (m.get(i, a)) return;
-        a = labels_[i];
-        for_faces(i, x, y, z, [&](std::size_t j) {
-          std::uint32_t k = 0;
-          if (m.get(j, k)) {
-            if (k != a) unite(a, k);
-          } else if (unk_[labels_[j]]) {
-            seeds_.push_back({static_cast<std::uint32_t>(j), labels_[j], a});
-            saved.push_back({static_cast<std::uint32_t>(j), labels_[j]});
-            m.set(j, 1, a);
-          }
-        });
-      });
-    }
+    if (!from_unknown) seeds_from_occupied(m, saved);
     // Step 2: per unknown segment, the group of its first seed and whether another one is beside it.
     std::vector<std::uint32_t> first(S, kNone);
     std::vector<char> several(S, 0);
@@ -392,7 +381,7 @@ class Grouper {
       if (first[e.segment] == kNone) first[e.segment] = g;
       else if (first[e.segment] != g) several[e.segment] = 1;
     }
-    std::vector<std::uint32_t> layer, next;
+    std::vector<std::uint32_t> next;
     for (const Seed& e : seeds_) {
       if (!several[e.segment]) continue;
       if (segs_[e.segment].voxels <= static_cast<std::uint64_t>(gap)) {
@@ -408,6 +397,136 @@ class Grouper {
     seeds_ = std::vector<Seed>();
     // Step 3 (the seeds of other unknown segments are never next to a voxel reached: their marks,
     // set by the search from the occupied side, are never read).
+    search_gaps(m, next, saved);
+    parallel_for(saved.size(), p_.threads, [&](std::size_t b, std::size_t e) {
+      for (std::size_t q = b; q < e; ++q) labels_[saved[q].first] = saved[q].second;  // (each voxel once)
+    });
+  }
+
+  // Step 1 of rule 6 from the occupied voxels, on the threads: the unknown voxels beside them are
+  // the seeds, each marked once (a compare-and-swap on its label) with the first occupied
+  // segment among its faces (for_faces()' order) and joining the others. Its own faces decide the
+  // mark, so whichever thread marks a seed writes the same one; labels are read with atomic
+  // loads, as other seeds are marked meanwhile.
+  void seeds_from_occupied(LabelMarks& m, std::vector<std::pair<std::uint32_t, std::uint32_t>>& saved) {
+    const unsigned b = m.b;
+    std::uint32_t* const l = m.labels;
+    struct Found {
+      std::vector<Seed> seeds;
+      std::vector<std::pair<std::uint32_t, std::uint32_t>> joins;
+    };
+    std::vector<Found> found;
+    for_members_in_pieces(occ_, found, [&](Found& out, std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
+      for_faces(i, x, y, z, [&](std::size_t j) {
+        std::uint32_t lj = label_at(j);
+        if ((lj >> b) != 0 || !unk_[lj]) return;  // (a seed already, or not unknown)
+        std::uint32_t a = kNone;
+        const std::size_t joins = out.joins.size();
+        for_faces(j, [&](std::size_t q) {
+          const std::uint32_t lq = label_at(q);  // (occupied voxels are never marked)
+          if ((lq >> b) != 0 || !occ_[lq]) return;
+          if (a == kNone) a = lq;
+          else if (lq != a) out.joins.push_back({a, lq});
+        });
+        if (__atomic_compare_exchange_n(&l[j], &lj, a | std::uint32_t(1) << b, false, __ATOMIC_RELAXED, __ATOMIC_RELAXED))
+          out.seeds.push_back({static_cast<std::uint32_t>(j), lj, a});
+        else
+          out.joins.resize(joins);  // (the thread that marked it has the same joins)
+      });
+    });
+    std::size_t n = 0;
+    for (const Found& f : found) n += f.seeds.size();
+    seeds_.reserve(seeds_.size() + n);
+    saved.reserve(saved.size() + n);
+    for (Found& f : found) {
+      for (const auto& j : f.joins) unite(j.first, j.second);
+      for (const Seed& e : f.seeds) seeds_.push_back(e), saved.push_back({e.voxel, e.segment});
+      f = Found();
+    }
+  }
+  // The same in one scan, the first segment to reach a seed kept (2^b above about 2^27 segments:
+  // a seed's label holds its kept segment meanwhile, so the scan must not take it for one of
+  // that segment's voxels).
+  void seeds_from_occupied(ArrayMarks& m, std::vector<std::pair<std::uint32_t, std::uint32_t>>& saved) {
+    for_members(occ_, [&](std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
+      std::uint32_t a = 0;
+      if (m.get(i, a)) return;
+      a = labels_[i];
+      for_faces(i, x, y, z, [&](std::size_t j) {
+        std::uint32_t k = 0;
+        if (m.get(j, k)) {
+          if (k != a) unite(a, k);
+        } else if (unk_[labels_[j]]) {
+          seeds_.push_back({static_cast<std::uint32_t>(j), labels_[j], a});
+          saved.push_back({static_cast<std::uint32_t>(j), labels_[j]});
+          m.set(j, 1, a);
+        }
+      });
+    });
+  }
+
+  // Step 3 of rule 6 on the threads, one depth at a time (the layer in pieces, each piece's
+  // findings taken in piece order): a voxel is taken by whichever wave reaches it first (one
+  // compare-and-swap on its label), the others meeting it there; `saved` gets each voxel taken.
+  void search_gaps(LabelMarks& m, std::vector<std::uint32_t>& next,
+                   std::vector<std::pair<std::uint32_t, std::uint32_t>>& saved) {
+    const int gap = p_.object_gap;
+    const unsigned b = m.b;
+    const std::uint32_t mask = (std::uint32_t(1) << b) - 1;
+    std::uint32_t* const l = m.labels;
+    struct Wave {
+      std::vector<std::uint32_t> next;
+      std::vector<std::pair<std::uint32_t, std::uint32_t>> saved, joins;
+    };
+    std::vector<std::uint32_t> layer;
+    std::vector<Wave> waves;
+    for (int depth = 1; depth < gap && !next.empty(); ++depth) {
+      layer.swap(next);
+      next.clear();
+      const bool grow = depth + 1 < gap;
+      const std::uint32_t marked = static_cast<std::uint32_t>(depth + 1) << b;
+      const std::size_t pieces = std::min<std::size_t>(kPieces, (layer.size() + 4095) / 4096);
+      waves.assign(pieces, Wave());
+      parallel_for_dynamic(pieces, p_.threads, [&](std::size_t p0, std::size_t p1) {
+        for (std::size_t p = p0; p < p1; ++p) {
+          Wave& w = waves[p];
+          for (std::size_t q = layer.size() * p / pieces, qe = layer.size() * (p + 1) / pieces; q < qe; ++q) {
+            const std::uint32_t u = layer[q];
+            const std::uint32_t a = __atomic_load_n(&l[u], __ATOMIC_RELAXED) & mask;  // (set at an earlier depth)
+            for_faces(u, [&](std::size_t j) {
+              std::uint32_t lj = __atomic_load_n(&l[j], __ATOMIC_RELAXED);
+              for (;;) {
+                if (const std::uint32_t dj = lj >> b) {
+                  const std::uint32_t k = lj & mask;
+                  if (k != a && depth + static_cast<int>(dj) <= gap &&
+                      (w.joins.empty() || w.joins.back() != std::make_pair(a, k)))
+                    w.joins.push_back({a, k});
+                  return;
+                }
+                if (!grow || !unk_[lj]) return;
+                if (__atomic_compare_exchange_n(&l[j], &lj, a | marked, false, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+                  w.saved.push_back({static_cast<std::uint32_t>(j), lj});
+                  w.next.push_back(static_cast<std::uint32_t>(j));
+                  return;
+                }
+              }
+            });
+          }
+        }
+      });
+      for (Wave& w : waves) {
+        for (const auto& j : w.joins) unite(j.first, j.second);
+        saved.insert(saved.end(), w.saved.begin(), w.saved.end());
+        next.insert(next.end(), w.next.begin(), w.next.end());
+        w = Wave();
+      }
+    }
+  }
+  // The same on one thread.
+  void search_gaps(ArrayMarks& m, std::vector<std::uint32_t>& next,
+                   std::vector<std::pair<std::uint32_t, std::uint32_t>>& saved) {
+    const int gap = p_.object_gap;
+    std::vector<std::uint32_t> layer;
     for (int depth = 1; depth < gap && !next.empty(); ++depth) {
       layer.swap(next);
       next.clear();
@@ -426,7 +545,6 @@ class Grouper {
         });
       }
     }
-    for (const auto& sv : saved) labels_[sv.first] = sv.second;
   }
 
   // Voxels per group (at the roots); `evidence`: leaving out those the surface band added.
