@@ -18,6 +18,7 @@ constexpr std::uint8_t kFree = static_cast<std::uint8_t>(State::free);
 constexpr std::uint8_t kUnknown = static_cast<std::uint8_t>(State::unknown);
 constexpr std::uint8_t kOccupied = static_cast<std::uint8_t>(State::occupied);
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();  // no segment
+using Pairs = std::vector<std::pair<std::uint32_t, std::uint32_t>>;
 
 // Union-find over segment ids whose roots are the smallest id of their set: a group's root is
 // then its member with the first first voxel, and numbering roots in id order keeps the order of
@@ -370,8 +371,8 @@ class Grouper {
   void proximity(bool from_unknown, Marks& m) {
     const std::size_t S = segs_.size();
     const int gap = p_.object_gap;
-    // (voxel whose label holds a kept segment, its own label)
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> saved;
+    // (voxel whose label holds a kept segment, its own label), in parts (each piece's, as found)
+    std::vector<Pairs> saved;
     if (!from_unknown) seeds_from_occupied(m, saved);
     // Step 2: per unknown segment, the group of its first seed and whether another one is beside it.
     std::vector<std::uint32_t> first(S, kNone);
@@ -388,7 +389,8 @@ class Grouper {
         unite(first[e.segment], e.kept);
       } else {
         if (from_unknown) {  // (from the occupied side the seeds are marked already)
-          saved.push_back({e.voxel, e.segment});
+          if (saved.empty()) saved.emplace_back();
+          saved.back().push_back({e.voxel, e.segment});
           m.set(e.voxel, 1, e.kept);
         }
         next.push_back(e.voxel);
@@ -398,8 +400,9 @@ class Grouper {
     // Step 3 (the seeds of other unknown segments are never next to a voxel reached: their marks,
     // set by the search from the occupied side, are never read).
     search_gaps(m, next, saved);
-    parallel_for(saved.size(), p_.threads, [&](std::size_t b, std::size_t e) {
-      for (std::size_t q = b; q < e; ++q) labels_[saved[q].first] = saved[q].second;  // (each voxel once)
+    parallel_for_dynamic(saved.size(), p_.threads, [&](std::size_t b, std::size_t e) {
+      for (std::size_t q = b; q < e; ++q)
+        for (const auto& sv : saved[q]) labels_[sv.first] = sv.second;  // (each voxel once)
     });
   }
 
@@ -408,7 +411,7 @@ class Grouper {
   // segment among its faces (for_faces()' order) and joining the others. Its own faces decide the
   // mark, so whichever thread marks a seed writes the same one; labels are read with atomic
   // loads, as other seeds are marked meanwhile.
-  void seeds_from_occupied(LabelMarks& m, std::vector<std::pair<std::uint32_t, std::uint32_t>>& saved) {
+  void seeds_from_occupied(LabelMarks& m, std::vector<Pairs>& saved) {
     const unsigned b = m.b;
     std::uint32_t* const l = m.labels;
     struct Found {
@@ -437,17 +440,20 @@ class Grouper {
     std::size_t n = 0;
     for (const Found& f : found) n += f.seeds.size();
     seeds_.reserve(seeds_.size() + n);
-    saved.reserve(saved.size() + n);
     for (Found& f : found) {
       for (const auto& j : f.joins) unite(j.first, j.second);
-      for (const Seed& e : f.seeds) seeds_.push_back(e), saved.push_back({e.voxel, e.segment});
+      Pairs part;
+      part.reserve(f.seeds.size());
+      for (const Seed& e : f.seeds) seeds_.push_back(e), part.push_back({e.voxel, e.segment});
+      saved.push_back(std::move(part));
       f = Found();
     }
   }
   // The same in one scan, the first segment to reach a seed kept (2^b above about 2^27 segments:
   // a seed's label holds its kept segment meanwhile, so the scan must not take it for one of
   // that segment's voxels).
-  void seeds_from_occupied(ArrayMarks& m, std::vector<std::pair<std::uint32_t, std::uint32_t>>& saved) {
+  void seeds_from_occupied(ArrayMarks& m, std::vector<Pairs>& saved) {
+    saved.emplace_back();
     for_members(occ_, [&](std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
       std::uint32_t a = 0;
       if (m.get(i, a)) return;
@@ -458,40 +464,51 @@ class Grouper {
           if (k != a) unite(a, k);
         } else if (unk_[labels_[j]]) {
           seeds_.push_back({static_cast<std::uint32_t>(j), labels_[j], a});
-          saved.push_back({static_cast<std::uint32_t>(j), labels_[j]});
+          saved.back().push_back({static_cast<std::uint32_t>(j), labels_[j]});
           m.set(j, 1, a);
         }
       });
     });
   }
 
-  // Step 3 of rule 6 on the threads, one depth at a time (the layer in pieces, each piece's
-  // findings taken in piece order): a voxel is taken by whichever wave reaches it first (one
-  // compare-and-swap on its label), the others meeting it there; `saved` gets each voxel taken.
-  void search_gaps(LabelMarks& m, std::vector<std::uint32_t>& next,
-                   std::vector<std::pair<std::uint32_t, std::uint32_t>>& saved) {
+  // Step 3 of rule 6 on the threads, one depth at a time, the layer in pieces: a voxel is taken
+  // by whichever wave reaches it first (one compare-and-swap on its label), the others meeting
+  // it there. Each piece's voxels taken are the next layer's part and a part of `saved` as they
+  // are (not gathered into one list: that held them twice).
+  void search_gaps(LabelMarks& m, std::vector<std::uint32_t>& seeds, std::vector<Pairs>& saved) {
     const int gap = p_.object_gap;
     const unsigned b = m.b;
     const std::uint32_t mask = (std::uint32_t(1) << b) - 1;
     std::uint32_t* const l = m.labels;
     struct Wave {
+      const std::uint32_t *from = nullptr, *to = nullptr;  // its stretch of the layer
       std::vector<std::uint32_t> next;
-      std::vector<std::pair<std::uint32_t, std::uint32_t>> saved, joins;
+      Pairs saved, joins;
     };
-    std::vector<std::uint32_t> layer;
+    std::vector<std::vector<std::uint32_t>> layer, parts;
+    parts.push_back(std::move(seeds));
     std::vector<Wave> waves;
-    for (int depth = 1; depth < gap && !next.empty(); ++depth) {
-      layer.swap(next);
-      next.clear();
+    for (int depth = 1; depth < gap; ++depth) {
+      layer.swap(parts);
+      parts.clear();
+      std::size_t total = 0;
+      for (const auto& part : layer) total += part.size();
+      if (total == 0) break;
       const bool grow = depth + 1 < gap;
       const std::uint32_t marked = static_cast<std::uint32_t>(depth + 1) << b;
-      const std::size_t pieces = std::min<std::size_t>(kPieces, (layer.size() + 4095) / 4096);
-      waves.assign(pieces, Wave());
-      parallel_for_dynamic(pieces, p_.threads, [&](std::size_t p0, std::size_t p1) {
+      const std::size_t chunk = std::max<std::size_t>(4096, (total + kPieces - 1) / kPieces);
+      waves.clear();
+      for (const auto& part : layer)
+        for (std::size_t o = 0; o < part.size(); o += chunk) {
+          waves.emplace_back();
+          waves.back().from = part.data() + o;
+          waves.back().to = part.data() + std::min(part.size(), o + chunk);
+        }
+      parallel_for_dynamic(waves.size(), p_.threads, [&](std::size_t p0, std::size_t p1) {
         for (std::size_t p = p0; p < p1; ++p) {
           Wave& w = waves[p];
-          for (std::size_t q = layer.size() * p / pieces, qe = layer.size() * (p + 1) / pieces; q < qe; ++q) {
-            const std::uint32_t u = layer[q];
+          for (const std::uint32_t* up = w.from; up != w.to; ++up) {
+            const std::uint32_t u = *up;
             const std::uint32_t a = __atomic_load_n(&l[u], __ATOMIC_RELAXED) & mask;  // (set at an earlier depth)
             for_faces(u, [&](std::size_t j) {
               std::uint32_t lj = __atomic_load_n(&l[j], __ATOMIC_RELAXED);
@@ -516,17 +533,18 @@ class Grouper {
       });
       for (Wave& w : waves) {
         for (const auto& j : w.joins) unite(j.first, j.second);
-        saved.insert(saved.end(), w.saved.begin(), w.saved.end());
-        next.insert(next.end(), w.next.begin(), w.next.end());
-        w = Wave();
+        if (!w.saved.empty()) saved.push_back(std::move(w.saved));
+        if (!w.next.empty()) parts.push_back(std::move(w.next));
       }
+      waves.clear();
+      layer.clear();
     }
   }
   // The same on one thread.
-  void search_gaps(ArrayMarks& m, std::vector<std::uint32_t>& next,
-                   std::vector<std::pair<std::uint32_t, std::uint32_t>>& saved) {
+  void search_gaps(ArrayMarks& m, std::vector<std::uint32_t>& next, std::vector<Pairs>& saved) {
     const int gap = p_.object_gap;
     std::vector<std::uint32_t> layer;
+    saved.emplace_back();
     for (int depth = 1; depth < gap && !next.empty(); ++depth) {
       layer.swap(next);
       next.clear();
@@ -538,7 +556,7 @@ class Grouper {
           if (const std::uint32_t dj = m.get(j, k)) {
             if (k != a && depth + static_cast<int>(dj) <= gap) unite(a, k);
           } else if (depth + 1 < gap && unk_[labels_[j]]) {
-            saved.push_back({static_cast<std::uint32_t>(j), labels_[j]});
+            saved.back().push_back({static_cast<std::uint32_t>(j), labels_[j]});
             m.set(j, static_cast<std::uint32_t>(depth + 1), a);
             next.push_back(static_cast<std::uint32_t>(j));
           }

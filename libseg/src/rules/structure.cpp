@@ -842,28 +842,37 @@ class Structure {
   // of voxels just above its inliers, which would otherwise join the feet of the furniture
   // standing on it to each other and to the walls; what stands on the floor (a leg, a box's side)
   // runs on above the band and stays.
+  // (The pieces on the threads: a voxel takes the smallest piece index that claims it, by an
+  // atomic minimum, so the order the pieces are looked at in changes nothing; a voxel an earlier
+  // piece has taken already is passed over.)
   void claim_noise(std::uint32_t s, const std::vector<Piece>& local) {
     const std::size_t n = members_.size();
-    std::vector<std::int32_t> take(n, -1);
+    constexpr std::uint32_t kNo = std::numeric_limits<std::uint32_t>::max();
+    std::vector<std::uint32_t> take(n, kNo);
     const double w = cell_;
-    for (std::size_t q = 0; q < local.size(); ++q) {
-      const Piece& pc = local[q];
-      if (!pc.structural) continue;
-      const double t = 0.5 * pc.min_height;
-      const int fits = static_cast<int>(std::floor(2 * t));
-      const Box box = band_box(pc, t, w);
-      for_box(box, [&](std::size_t m) {
-        if (take[m] >= 0 || labels_[members_[m]] != s) return;
-        const Vec& x = pts_[m];
-        if (!box.holds(x) || std::fabs(pc.pl.distance(x[0], x[1], x[2])) > t) return;
-        const double a = dot(x, pc.u), b = dot(x, pc.v);
-        if (a < pc.u0 - w || a > pc.u1 + w || b < pc.v0 - w || b > pc.v1 + w) return;
-        if (thickness(s, x, pc.axis, fits + 1) > fits) return;
-        take[m] = static_cast<std::int32_t>(q);
-      });
-    }
+    parallel_for_dynamic(local.size(), p_.threads, [&](std::size_t q0, std::size_t q1) {
+      for (std::size_t q = q0; q < q1; ++q) {
+        const Piece& pc = local[q];
+        if (!pc.structural) continue;
+        const double t = 0.5 * pc.min_height;
+        const int fits = static_cast<int>(std::floor(2 * t));
+        const Box box = band_box(pc, t, w);
+        const auto qq = static_cast<std::uint32_t>(q);
+        for_box(box, [&](std::size_t m) {
+          std::uint32_t held = __atomic_load_n(&take[m], __ATOMIC_RELAXED);
+          if (held < qq || labels_[members_[m]] != s) return;
+          const Vec& x = pts_[m];
+          if (!box.holds(x) || std::fabs(pc.pl.distance(x[0], x[1], x[2])) > t) return;
+          const double a = dot(x, pc.u), b = dot(x, pc.v);
+          if (a < pc.u0 - w || a > pc.u1 + w || b < pc.v0 - w || b > pc.v1 + w) return;
+          if (thickness(s, x, pc.axis, fits + 1) > fits) return;
+          while (held > qq && !__atomic_compare_exchange_n(&take[m], &held, qq, false, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+          }
+        });
+      }
+    });
     for (std::size_t m = 0; m < n; ++m)
-      if (take[m] >= 0) labels_[members_[m]] = kTop - static_cast<std::uint32_t>(take[m]);
+      if (take[m] != kNo) labels_[members_[m]] = kTop - take[m];
   }
 
   // Temporary labels, above every id: structural pieces kTop - q, remainder components below them.
@@ -874,11 +883,15 @@ class Structure {
       if (piece_of[m] >= 0) labels_[members_[m]] = kTop - static_cast<std::uint32_t>(piece_of[m]);
     const std::uint32_t first_temp = static_cast<std::uint32_t>(segs_.size());  // temporaries are above
     const auto member = [&](std::uint32_t l) { return l == s || l >= first_temp; };
-    for (std::size_t q = 0; q < P; ++q) {
-      Piece& pc = local[q];
-      if (!pc.structural) continue;
-      pc.min_height = std::max(kMinObjectHeight, kNoiseHeights * surface_sigma(pc, std::int32_t(q), axes, piece_of));
-    }
+    // (Each piece's spread, then its noise, on the threads: they only read the labels and the
+    // voxels' lists.)
+    parallel_for_dynamic(P, p_.threads, [&](std::size_t q0, std::size_t q1) {
+      for (std::size_t q = q0; q < q1; ++q) {
+        Piece& pc = local[q];
+        if (!pc.structural) continue;
+        pc.min_height = std::max(kMinObjectHeight, kNoiseHeights * surface_sigma(pc, std::int32_t(q), axes, piece_of));
+      }
+    });
     claim_noise(s, local);
     // Open sides: from each structural voxel, one to three voxels along +n and -n, the first voxel
     // outside the segment; a side is open when it saw free space at least a quarter as often as
