@@ -24,6 +24,10 @@ constexpr double kMaxSag = 0.5;
 // A segment is examined when at least this share (per cent) of a sample of its voxels is thin
 // along some axis (examine()).
 constexpr std::size_t kMinSurfacePercent = 50;
+// An occupied segment too large to be a fragment, not structure, joins a structural piece's
+// segment when at least this share (per cent) of its voxels lie within one voxel edge of the
+// piece's plane (attract_fragments(); docs/algorithm.md rule 11, "Coplanar segments").
+constexpr std::size_t kCoplanarPercent = 80;
 
 Vec cross(const Vec& a, const Vec& b) {
   return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
@@ -1047,7 +1051,9 @@ class Structure {
       if (pc.structural) pieces_.push_back(pc);
   }
 
-  // Small occupied groups lying in a piece's plane, inside its extent, join its segment.
+  // Small occupied groups lying in a piece's plane, inside its extent, join its segment; larger
+  // ones that are not structure join a structural piece's segment when most of their voxels lie
+  // in its plane, wherever in the plane (see kCoplanarPercent).
   void attract_fragments() {
     if (pieces_.empty()) return;
     const std::size_t S = segs_.size();
@@ -1057,29 +1063,39 @@ class Structure {
     const double m = margin_;
     for (std::size_t f = 0; f < S; ++f) {
       const Segment& seg = segs_[f];
-      if (seg.state != State::occupied || seg.kind == Kind::structure || seg.voxels >= min_object_ ||
-          seg.voxels >= 2 * min_plane_)  // (never a candidate, so never a piece's segment)
-        continue;
+      if (seg.state != State::occupied || seg.kind == Kind::structure) continue;
+      // (A small one is never a candidate, so never a piece's segment.)
+      const bool small = seg.voxels < min_object_ && seg.voxels < 2 * min_plane_;
       vox.clear();
       list_members(static_cast<std::uint32_t>(f), vox);
+      // A larger one may leave this many of its voxels off the plane.
+      const std::size_t off_plane = small ? 0 : vox.size() * (100 - kCoplanarPercent) / 100;
       for (const Piece& pc : pieces_) {
+        if (pc.segment == f || (!small && !pc.structural)) continue;
         bool near = true;
-        for (int k = 0; k < 3 && near; ++k)
+        for (int k = 0; k < 3 && near && small; ++k)
           near = double(seg.bbox_max[k]) + m >= double(pc.lo[k]) && double(seg.bbox_min[k]) <= double(pc.hi[k]) + m;
-        if (!near || pc.segment == f) continue;
-        bool inside = true;
-        for (std::size_t i = 0; i < vox.size() && inside; ++i) {
+        if (!near) continue;
+        std::size_t off = 0;
+        for (std::size_t i = 0; i < vox.size() && off <= off_plane; ++i) {
           const Vec c = coords(vox[i]);
-          const double a = dot(c, pc.u), b = dot(c, pc.v);
-          inside = std::fabs(pc.pl.distance(c[0], c[1], c[2])) <= 1.0 && a >= pc.u0 - m && a <= pc.u1 + m &&
-                   b >= pc.v0 - m && b <= pc.v1 + m;
+          bool in = std::fabs(pc.pl.distance(c[0], c[1], c[2])) <= 1.0;
+          if (in && small) {
+            const double a = dot(c, pc.u), b = dot(c, pc.v);
+            in = a >= pc.u0 - m && a <= pc.u1 + m && b >= pc.v0 - m && b <= pc.v1 + m;
+          }
+          off += !in;
         }
-        if (!inside) continue;
+        if (off > off_plane) continue;
         into[f] = pc.segment;
         any = true;
         break;
       }
     }
+    // A small one may have joined a larger one that joined a structure segment: it goes there too
+    // (structure segments join nothing, so every chain ends within two steps).
+    for (std::size_t f = 0; f < S; ++f)
+      if (into[f] != ~0u && into[into[f]] != ~0u) into[f] = into[into[f]];
     if (!any) return;
     // Merged statistics (voxel-weighted, members in id order), then dense ids.
     std::vector<double> mop(S), cx(S), cy(S), cz(S);
