@@ -277,3 +277,29 @@ TEST(Structure, SegmentsLyingInAStructuralPlaneFarFromItsPieceJoinIt) {
   EXPECT_EQ(s.segments[shell].voxels, in_shell);
   for (std::size_t i = 0; i < s.segments.size(); ++i) EXPECT_EQ(s.segments[i].id, i);
 }
+
+TEST(Structure, SegmentsLyingInAWideUnstructuralPieceOfTheShellJoinIt) {
+  // 10 cm voxels: a floor (z = 2) and a wall (x = 2) 5.7 m long up to a ceiling at z = 27 seen
+  // in rows along x every 6 voxels (unknown between them: rings too far apart for rule 6) joined
+  // at their far end by a row along y; the rows touch the wall, so they are the shell's. Their
+  // plane is a piece 3.6 x 5.7 m wide but no area (every row of its 4 x 4 cells has a missing
+  // neighbour row), so not structural. A patch of 21 x 8 voxels in that plane beyond the room (y 66-73), touching
+  // nothing, lies wholly in it: it joins the shell. Below the ceiling the room is free.
+  const auto ceiling_rows = [](int x, int y, int z) {
+    if (z == 2 && in_box(x, y, z, 2, 2, 2, 37, 58, 2)) return O;
+    if (x == 2 && in_box(x, y, z, 2, 2, 2, 2, 58, 27)) return O;
+    if (z == 27 && in_box(x, y, z, 2, 2, 27, 37, 58, 27) && ((y - 2) % 6 == 0 || x == 37)) return O;
+    if (z == 27 && in_box(x, y, z, 10, 66, 27, 30, 73, 27)) return O;
+    if (z < 2 || x < 2 || z >= 27) return U;
+    return F;
+  };
+  Scene s({40, 80, 30}, 0.1, ceiling_rows);
+  s.run(structure_only());
+  const std::uint32_t shell = s.at(2, 30, 20);
+  EXPECT_EQ(s.segments[shell].kind, Kind::structure);
+  EXPECT_EQ(s.at(30, 14, 27), shell);  // a ceiling row
+  EXPECT_EQ(s.at(20, 70, 27), shell);  // the patch
+  std::size_t occupied = 0;
+  for (const Segment& seg : s.segments) occupied += seg.state == State::occupied;
+  EXPECT_EQ(occupied, 1u);
+}

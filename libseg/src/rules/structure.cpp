@@ -157,6 +157,7 @@ class Structure {
       for (auto& e : batch) {
         e->apply();
         pieces_.insert(pieces_.end(), e->pieces_.begin(), e->pieces_.end());
+        wide_.insert(wide_.end(), e->wide_.begin(), e->wide_.end());
         e.reset();  // (its scratch back before the next split)
       }
     }
@@ -1046,14 +1047,17 @@ class Structure {
     }
     sums[0].store(segs_[s]);
     for (std::size_t k = 1; k < sums.size(); ++k) sums[k].store(segs_[first_temp + k - 1]);
-    // Its structural pieces gather coplanar fragments; the rest may now be in objects.
+    // Its structural pieces gather coplanar fragments; the rest may now be in objects. Its wide
+    // pieces gather larger coplanar segments after the structural ones (attract_fragments()).
     for (const Piece& pc : local)
       if (pc.structural) pieces_.push_back(pc);
+      else if (pc.u1 - pc.u0 + 1 >= extent_ && pc.v1 - pc.v0 + 1 >= extent_) wide_.push_back(pc);
   }
 
   // Small occupied groups lying in a piece's plane, inside its extent, join its segment; larger
-  // ones that are not structure join a structural piece's segment when most of their voxels lie
-  // in its plane, wherever in the plane (see kCoplanarPercent).
+  // ones that are not structure join a structure segment when most of their voxels lie in the
+  // plane of one of its structural pieces, or else of its wide ones (wide_), wherever in the plane
+  // (see kCoplanarPercent).
   void attract_fragments() {
     if (pieces_.empty()) return;
     const std::size_t S = segs_.size();
@@ -1061,6 +1065,21 @@ class Structure {
     bool any = false;
     std::vector<std::uint32_t> vox;
     const double m = margin_;
+    // Whether the voxels of segment f (vox) lie in piece pc's plane, all but off_plane of them,
+    // and inside its extent widened by the margin when `extent`.
+    const auto lies_in = [&](const Piece& pc, std::size_t off_plane, bool extent) {
+      std::size_t off = 0;
+      for (std::size_t i = 0; i < vox.size() && off <= off_plane; ++i) {
+        const Vec c = coords(vox[i]);
+        bool in = std::fabs(pc.pl.distance(c[0], c[1], c[2])) <= 1.0;
+        if (in && extent) {
+          const double a = dot(c, pc.u), b = dot(c, pc.v);
+          in = a >= pc.u0 - m && a <= pc.u1 + m && b >= pc.v0 - m && b <= pc.v1 + m;
+        }
+        off += !in;
+      }
+      return off <= off_plane;
+    };
     for (std::size_t f = 0; f < S; ++f) {
       const Segment& seg = segs_[f];
       if (seg.state != State::occupied || seg.kind == Kind::structure) continue;
@@ -1068,29 +1087,29 @@ class Structure {
       const bool small = seg.voxels < min_object_ && seg.voxels < 2 * min_plane_;
       vox.clear();
       list_members(static_cast<std::uint32_t>(f), vox);
-      // A larger one may leave this many of its voxels off the plane.
-      const std::size_t off_plane = small ? 0 : vox.size() * (100 - kCoplanarPercent) / 100;
-      for (const Piece& pc : pieces_) {
-        if (pc.segment == f || (!small && !pc.structural)) continue;
-        bool near = true;
-        for (int k = 0; k < 3 && near && small; ++k)
-          near = double(seg.bbox_max[k]) + m >= double(pc.lo[k]) && double(seg.bbox_min[k]) <= double(pc.hi[k]) + m;
-        if (!near) continue;
-        std::size_t off = 0;
-        for (std::size_t i = 0; i < vox.size() && off <= off_plane; ++i) {
-          const Vec c = coords(vox[i]);
-          bool in = std::fabs(pc.pl.distance(c[0], c[1], c[2])) <= 1.0;
-          if (in && small) {
-            const double a = dot(c, pc.u), b = dot(c, pc.v);
-            in = a >= pc.u0 - m && a <= pc.u1 + m && b >= pc.v0 - m && b <= pc.v1 + m;
+      if (small) {
+        for (const Piece& pc : pieces_) {
+          bool near = pc.segment != f;
+          for (int k = 0; k < 3 && near; ++k)
+            near = double(seg.bbox_max[k]) + m >= double(pc.lo[k]) && double(seg.bbox_min[k]) <= double(pc.hi[k]) + m;
+          if (near && lies_in(pc, 0, true)) {
+            into[f] = pc.segment;
+            break;
           }
-          off += !in;
         }
-        if (off > off_plane) continue;
-        into[f] = pc.segment;
-        any = true;
-        break;
+      } else {
+        // A larger one may leave this many of its voxels off the plane.
+        const std::size_t off_plane = vox.size() * (100 - kCoplanarPercent) / 100;
+        for (const std::vector<Piece>* list : {&pieces_, &wide_}) {
+          for (const Piece& pc : *list)
+            if (pc.segment != f && (pc.structural || list == &wide_) && lies_in(pc, off_plane, false)) {
+              into[f] = pc.segment;
+              break;
+            }
+          if (into[f] != ~0u) break;
+        }
       }
+      any = any || into[f] != ~0u;
     }
     // A small one may have joined a larger one that joined a structure segment: it goes there too
     // (structure segments join nothing, so every chain ends within two steps).
@@ -1158,6 +1177,9 @@ class Structure {
     std::uint32_t operator[](std::size_t i) const { return p[i]; }
   } members_;
   std::vector<std::uint32_t> listed_;
+  // Pieces of split segments that are not structural but span structure_extent both ways (a
+  // ceiling seen in rings too sparse to be an area): planes of structure for coplanar segments.
+  std::vector<Piece> wide_;
   std::vector<Vec> pts_;
   std::vector<std::uint32_t> by_[2];  // the examined segment's voxels (into pts_) by x, by y
   // Where each row of the examined segment's voxels' box starts in pts_ (row (y, z):
