@@ -58,14 +58,15 @@ Output collect(const occseg_result* r, std::size_t voxels = kN * kN * kN) {
   return o;
 }
 
-// Segments `map` with the default preset and `threads` worker threads.
-Output segment(const occseg_map* map, int threads) {
+// Segments `map` (of `voxels` voxels, the blobs' by default) with the default preset and
+// `threads` worker threads.
+Output segment(const occseg_map* map, int threads, std::size_t voxels = kN * kN * kN) {
   occseg_params* params = nullptr;
   EXPECT_EQ(occseg_params_create(&params), OCCSEG_OK);
   EXPECT_EQ(occseg_params_set_int(params, "threads", threads), OCCSEG_OK);
   occseg_result* r = nullptr;
   EXPECT_EQ(occseg_segment(&r, map, params), OCCSEG_OK) << occseg_last_error();
-  Output o = r ? collect(r) : Output{};
+  Output o = r ? collect(r, voxels) : Output{};
   occseg_result_free(r);
   occseg_params_free(params);
   return o;
@@ -375,17 +376,7 @@ TEST(Concurrency, RuleElevenSearchesSideBySideMatchOneThread) {
       }
   occseg_map* map = nullptr;
   ASSERT_EQ(occseg_map_from_buffer(&map, p.data(), OCCSEG_F32, d, nullptr, 0.1), OCCSEG_OK);
-  Output out[2];
-  for (int t = 0; t < 2; ++t) {
-    occseg_params* params = nullptr;
-    ASSERT_EQ(occseg_params_create(&params), OCCSEG_OK);
-    ASSERT_EQ(occseg_params_set_int(params, "threads", t + 1), OCCSEG_OK);
-    occseg_result* r = nullptr;
-    ASSERT_EQ(occseg_segment(&r, map, params), OCCSEG_OK) << occseg_last_error();
-    out[t] = collect(r, p.size());
-    occseg_result_free(r);
-    occseg_params_free(params);
-  }
+  const Output out[2] = {segment(map, 1, p.size()), segment(map, 2, p.size())};
   occseg_map_free(map);
   const auto kinds = [&](occseg_kind k) {
     return std::count_if(out[0].segments.begin(), out[0].segments.end(),
@@ -410,17 +401,7 @@ TEST(Concurrency, RuleSixSearchesOnThreadsMatchOneThread) {
       for (const std::size_t x : {10, 13, 20, 25}) p[x + d[0] * (y + d[1] * z)] = 0.9f;
   occseg_map* map = nullptr;
   ASSERT_EQ(occseg_map_from_buffer(&map, p.data(), OCCSEG_F32, d, nullptr, 0.1), OCCSEG_OK);
-  Output out[2];
-  for (int t = 0; t < 2; ++t) {
-    occseg_params* params = nullptr;
-    ASSERT_EQ(occseg_params_create(&params), OCCSEG_OK);
-    ASSERT_EQ(occseg_params_set_int(params, "threads", t + 1), OCCSEG_OK);
-    occseg_result* r = nullptr;
-    ASSERT_EQ(occseg_segment(&r, map, params), OCCSEG_OK) << occseg_last_error();
-    out[t] = collect(r, p.size());
-    occseg_result_free(r);
-    occseg_params_free(params);
-  }
+  const Output out[2] = {segment(map, 1, p.size()), segment(map, 2, p.size())};
   occseg_map_free(map);
   const auto at = [&](std::size_t x) { return out[0].labels[x + d[0] * (d[1] / 2 + d[1] * (d[2] / 2))]; };
   EXPECT_EQ(at(10), at(13));
