@@ -28,16 +28,19 @@ struct Block {
 enum class Kind : std::uint8_t { free = 0, unknown = 1, structure = 2, object = 3, clutter = 4 };
 const char* kind_name(Kind k);
 
+// (kind beside state, in the padding before voxels: 72 bytes, not 80; the labelling's table of
+// a noisy map holds 250 k of them at the pipeline's peak.)
 struct Segment {
   std::uint32_t id = 0;
   State state = State::unknown;
+  Kind kind = Kind::unknown;                       // set by segment() (assign_kinds)
   std::uint64_t voxels = 0;
   double mop = 0;                                  // mean occupancy probability of its voxels
   std::array<std::uint32_t, 3> bbox_min{0, 0, 0};  // voxel indices, inclusive
   std::array<std::uint32_t, 3> bbox_max{0, 0, 0};
   std::array<double, 3> centroid{0, 0, 0};         // mean voxel index (x, y, z)
-  Kind kind = Kind::unknown;                       // set by segment() (assign_kinds)
 };
+static_assert(sizeof(Segment) == 72, "Segment: kind belongs in the padding after state");
 
 struct StageTime {
   std::string stage;
