@@ -251,13 +251,15 @@ TEST(Structure, RoomsSearchedSideBySideComeOutAsOneRoomAlone) {
 
 TEST(Structure, SegmentsLyingInAStructuralPlaneFarFromItsPieceJoinIt) {
   // The room of FloorAndWallAre... and, 2.2 m beyond the end of its wall along y, free space
-  // between: a strip of the same wall (x = 2, 16 x 6 voxels: the rings of a far part of a wall)
-  // and a block 5 voxels deep against that plane. The strip lies wholly in the wall's plane, far
-  // outside its piece's extent: it joins the structure segment. The block has 2 of its 5 layers
-  // within a voxel edge of the plane (40 %): it stays apart.
+  // between: a strip of the same wall (x = 2, 16 x 6 voxels: the rings of a far part of a wall),
+  // a speckle of two voxels in that plane (y = 50) and a block 5 voxels deep against it. The strip
+  // and the speckle lie wholly in the wall's plane, far outside its piece's extent: they join the
+  // structure segment. The block has 2 of its 5 layers within a voxel edge of the plane (40 %):
+  // it stays apart.
   Scene s({40, 80, 30}, 0.1, [](int x, int y, int z) {
     if (y <= 39) return room_with_box(x, y, z);
     if (x == 2 && in_box(x, y, z, 2, 60, 10, 2, 75, 15)) return O;
+    if (x == 2 && in_box(x, y, z, 2, 50, 12, 2, 51, 12)) return O;
     if (in_box(x, y, z, 2, 60, 20, 6, 65, 25)) return O;
     if (z < 2 || x < 2) return U;
     return F;
@@ -267,6 +269,7 @@ TEST(Structure, SegmentsLyingInAStructuralPlaneFarFromItsPieceJoinIt) {
   EXPECT_EQ(s.segments[shell].kind, Kind::structure);
   EXPECT_EQ(s.at(2, 60, 10), shell);
   EXPECT_EQ(s.at(2, 75, 15), shell);
+  EXPECT_EQ(s.at(2, 50, 12), shell);  // the speckle
   const std::uint32_t block = s.at(4, 62, 22);
   EXPECT_NE(block, shell);
   EXPECT_EQ(s.at(2, 60, 20), block);

@@ -24,7 +24,7 @@ constexpr double kMaxSag = 0.5;
 // A segment is examined when at least this share (per cent) of a sample of its voxels is thin
 // along some axis (examine()).
 constexpr std::size_t kMinSurfacePercent = 50;
-// An occupied segment too large to be a fragment, not structure, joins a structural piece's
+// An occupied segment that is not structure (and no fragment of a piece) joins a structural piece's
 // segment when at least this share (per cent) of its voxels lie within one voxel edge of the
 // piece's plane (attract_fragments(); docs/algorithm.md rule 11, "Coplanar segments").
 constexpr std::size_t kCoplanarPercent = 80;
@@ -1054,10 +1054,10 @@ class Structure {
       else if (pc.u1 - pc.u0 + 1 >= extent_ && pc.v1 - pc.v0 + 1 >= extent_) wide_.push_back(pc);
   }
 
-  // Small occupied groups lying in a piece's plane, inside its extent, join its segment; larger
-  // ones that are not structure join a structure segment when most of their voxels lie in the
-  // plane of one of its structural pieces, or else of its wide ones (wide_), wherever in the plane
-  // (see kCoplanarPercent).
+  // Small occupied groups lying in a piece's plane, inside its extent, join its segment; the
+  // others that are not structure (small ones included) join a structure segment when most of
+  // their voxels lie in the plane of one of its structural pieces, or else of its wide ones
+  // (wide_), wherever in the plane (see kCoplanarPercent).
   void attract_fragments() {
     if (pieces_.empty()) return;
     const std::size_t S = segs_.size();
@@ -1097,8 +1097,9 @@ class Structure {
             break;
           }
         }
-      } else {
-        // A larger one may leave this many of its voxels off the plane.
+      }
+      if (into[f] == ~0u) {  // (a small one too: a speckle lying in a wall's plane, beyond its piece)
+        // It may leave this many of its voxels off the plane.
         const std::size_t off_plane = vox.size() * (100 - kCoplanarPercent) / 100;
         for (const std::vector<Piece>* list : {&pieces_, &wide_}) {
           for (const Piece& pc : *list)
