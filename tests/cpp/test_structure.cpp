@@ -286,8 +286,9 @@ TEST(Structure, SegmentsLyingInAWideUnstructuralPieceOfTheShellJoinIt) {
   // in rows along x every 6 voxels (unknown between them: rings too far apart for rule 6) joined
   // at their far end by a row along y; the rows touch the wall, so they are the shell's. Their
   // plane is a piece 3.6 x 5.7 m wide but no area (every row of its 4 x 4 cells has a missing
-  // neighbour row), so not structural. A patch of 21 x 8 voxels in that plane beyond the room (y 66-73), touching
-  // nothing, lies wholly in it: it joins the shell. Below the ceiling the room is free.
+  // neighbour row), so not structural. A patch of 21 x 8 voxels in that plane beyond the room
+  // (y 66-73), touching nothing, lies wholly in it: it joins the shell. Below the ceiling the room
+  // is free.
   const auto ceiling_rows = [](int x, int y, int z) {
     if (z == 2 && in_box(x, y, z, 2, 2, 2, 37, 58, 2)) return O;
     if (x == 2 && in_box(x, y, z, 2, 2, 2, 2, 58, 27)) return O;
