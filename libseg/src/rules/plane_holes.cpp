@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "occseg/parallel.hpp"
 #include "rules/planes.hpp"
 
 namespace occseg {
@@ -16,8 +17,8 @@ double distance(const PlanePiece& pc, double x, double y, double z) {
 
 class PlaneHoles {
  public:
-  PlaneHoles(const Grid& g, LabelArray& labels, std::vector<Segment>& segs, int gap, int object_gap)
-      : g_(g), d_(g.dims), labels_(labels), segs_(segs), gap_(gap), object_gap_(object_gap) {}
+  PlaneHoles(const Grid& g, LabelArray& labels, std::vector<Segment>& segs, int gap, int object_gap, int threads)
+      : g_(g), d_(g.dims), labels_(labels), segs_(segs), gap_(gap), object_gap_(object_gap), threads_(threads) {}
 
   void run(const std::vector<PlanePiece>& pieces) {
     // Decided on the labels as they are: (voxel, segment it joins), each voxel once (first piece).
@@ -97,8 +98,25 @@ class PlaneHoles {
   State state(std::uint64_t i) const { return segs_[labels_[i]].state; }
 
   // The box of segment s from its voxels (within its old box, which holds them all).
+  // (The box shrinks only where a face of it holds none of s's voxels any more: the six faces are
+  // looked at first, each up to its first voxel of s, which for a large free segment, the room's
+  // free space, is its first voxel or nearly; the box is scanned whole only when a face emptied.)
   void recompute_box(std::uint32_t s) {
     Segment& seg = segs_[s];
+    const auto face_holds = [&](int k, std::uint32_t at) {
+      std::array<std::uint32_t, 3> b0 = seg.bbox_min, b1 = seg.bbox_max;
+      b0[k] = b1[k] = at;
+      for (std::uint32_t z = b0[2]; z <= b1[2]; ++z)
+        for (std::uint32_t y = b0[1]; y <= b1[1]; ++y) {
+          const std::size_t row = g_.index(0, y, z);
+          for (std::uint32_t x = b0[0]; x <= b1[0]; ++x)
+            if (labels_[row + x] == s) return true;
+        }
+      return false;
+    };
+    bool same = true;
+    for (int k = 0; k < 3 && same; ++k) same = face_holds(k, seg.bbox_min[k]) && face_holds(k, seg.bbox_max[k]);
+    if (same) return;
     std::array<std::uint32_t, 3> lo{~0u, ~0u, ~0u}, hi{0, 0, 0};
     for (std::uint32_t z = seg.bbox_min[2]; z <= seg.bbox_max[2]; ++z)
       for (std::uint32_t y = seg.bbox_min[1]; y <= seg.bbox_max[1]; ++y) {
@@ -144,25 +162,28 @@ class PlaneHoles {
     std::vector<char> ok(P, 0);
     const long lim[3] = {long(d_.nx), long(d_.ny), long(d_.nz)};
     const long stride[3] = {1, long(d_.nx), long(d_.nx * d_.ny)};
-    for (std::size_t q = 0; q < P; ++q) {
-      const PlanePiece& pc = pieces[q];
-      const std::uint32_t s = labels_[pc.voxel];
-      const int a = normal_axis(pc);
-      std::size_t seen[2] = {0, 0};
-      for_inliers(pc, [&](std::uint64_t i, long x, long y, long z) {
-        const long at = a == 0 ? x : (a == 1 ? y : z);
-        for (int side = 0; side < 2; ++side)
-          for (long step = 1; step <= 3; ++step) {
-            const long t = at + (side == 0 ? step : -step);
-            if (t < 0 || t >= lim[a]) break;
-            const std::uint64_t j = std::uint64_t(long(i) + (t - at) * stride[a]);
-            if (labels_[j] == s) continue;
-            seen[side] += segs_[labels_[j]].state == State::free;
-            break;
-          }
-      });
-      ok[q] = seen[0] > 0 && seen[1] > 0 && 4 * seen[0] >= seen[1] && 4 * seen[1] >= seen[0];
-    }
+    // (The pieces on the threads: each reads the labels only.)
+    parallel_for_dynamic(P, threads_, [&](std::size_t q0, std::size_t q1) {
+      for (std::size_t q = q0; q < q1; ++q) {
+        const PlanePiece& pc = pieces[q];
+        const std::uint32_t s = labels_[pc.voxel];
+        const int a = normal_axis(pc);
+        std::size_t seen[2] = {0, 0};
+        for_inliers(pc, [&](std::uint64_t i, long x, long y, long z) {
+          const long at = a == 0 ? x : (a == 1 ? y : z);
+          for (int side = 0; side < 2; ++side)
+            for (long step = 1; step <= 3; ++step) {
+              const long t = at + (side == 0 ? step : -step);
+              if (t < 0 || t >= lim[a]) break;
+              const std::uint64_t j = std::uint64_t(long(i) + (t - at) * stride[a]);
+              if (labels_[j] == s) continue;
+              seen[side] += segs_[labels_[j]].state == State::free;
+              break;
+            }
+        });
+        ok[q] = seen[0] > 0 && seen[1] > 0 && 4 * seen[0] >= seen[1] && 4 * seen[1] >= seen[0];
+      }
+    });
     std::vector<char> stacked(P, 0);
     for (std::size_t q = 0; q < P; ++q)
       for (std::size_t r = q + 1; r < P; ++r) {
@@ -272,7 +293,7 @@ class PlaneHoles {
   const Dims d_;
   LabelArray& labels_;
   std::vector<Segment>& segs_;
-  const int gap_, object_gap_;
+  const int gap_, object_gap_, threads_;
 };
 
 }  // namespace
@@ -280,7 +301,7 @@ class PlaneHoles {
 void fill_plane_holes(const Grid& grid, LabelArray& labels, std::vector<Segment>& segments, const Params& params,
                       const std::vector<PlanePiece>& pieces) {
   if (params.plane_holes <= 0 || pieces.empty()) return;
-  PlaneHoles(grid, labels, segments, params.plane_holes, params.object_gap).run(pieces);
+  PlaneHoles(grid, labels, segments, params.plane_holes, params.object_gap, params.threads).run(pieces);
 }
 
 }  // namespace occseg
