@@ -416,7 +416,7 @@ class Grouper {
     std::uint32_t* const l = m.labels;
     struct Found {
       std::vector<Seed> seeds;
-      std::vector<std::pair<std::uint32_t, std::uint32_t>> joins;
+      Pairs joins;
     };
     std::vector<Found> found;
     for_members_in_pieces(occ_, found, [&](Found& out, std::size_t i, std::size_t x, std::size_t y, std::size_t z) {

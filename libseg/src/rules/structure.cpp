@@ -180,6 +180,10 @@ class Structure {
     return {double(i % d_.nx), double((i / d_.nx) % d_.ny), double(i / (d_.nx * d_.ny))};
   }
 
+  // Whether a piece spans structure_extent along both of its own axes (structural if it is also
+  // an area and flat; wide otherwise).
+  bool spans_extent(const Piece& pc) const { return pc.u1 - pc.u0 + 1 >= extent_ && pc.v1 - pc.v0 + 1 >= extent_; }
+
   void list_members(std::uint32_t s, std::vector<std::uint32_t>& out) const {
     out.clear();
     const Segment& seg = segs_[s];
@@ -767,7 +771,7 @@ class Structure {
         if (pc.voxels < min_plane_) continue;
         pc.segment = s, pc.pl = pl, pc.axis = axis;
         // Structural: wide both ways, an area (at least a quarter of its cells inner ones), and flat.
-        pc.structural = pc.u1 - pc.u0 + 1 >= extent_ && pc.v1 - pc.v0 + 1 >= extent_ && 4 * inner[q] >= cells_of[q];
+        pc.structural = spans_extent(pc) && 4 * inner[q] >= cells_of[q];
         if (pc.structural) curved[q] = 1;  // decided below
         index[q] = static_cast<std::int32_t>(local.size());
         local.push_back(pc);
@@ -1051,7 +1055,7 @@ class Structure {
     // pieces gather larger coplanar segments after the structural ones (attract_fragments()).
     for (const Piece& pc : local)
       if (pc.structural) pieces_.push_back(pc);
-      else if (pc.u1 - pc.u0 + 1 >= extent_ && pc.v1 - pc.v0 + 1 >= extent_) wide_.push_back(pc);
+      else if (spans_extent(pc)) wide_.push_back(pc);
   }
 
   // Small occupied groups lying in a piece's plane, inside its extent, join its segment; the
