@@ -10,6 +10,7 @@
 
 #include "isa_levels.hpp"
 #include "occseg/segment.hpp"
+#include "rules/objects.hpp"
 #include "rules/planes.hpp"
 #include "state_scene.hpp"
 
@@ -270,6 +271,30 @@ TEST(Planes, FragmentsCutOffByAnObjectJoinIt) {
   EXPECT_EQ(s.at(23, 13, 2), box_id);
   EXPECT_NE(s.at(0, 0, 2), box_id);
   EXPECT_EQ(s.segments[box_id].voxels, 6u * 4 * 5 + 2);
+}
+
+// A floor seen in two strips with a line of unknown voxels between them (the rays' gap) is one
+// segment by rule 6; a box standing on the first strip splits off, and the far strip, which the
+// box never touched, stays with the floor instead of becoming a segment of its own.
+TEST(Planes, PartsOfTheSupportTheSplitDidNotCutOffStayWithIt) {
+  Scene s(Dims{30, 30, 12}, [](int x, int y, int z) {
+    if (z < 2 || (z == 2 && x == 14)) return 1;
+    if (z == 2) return 2;
+    return in_box(x, y, z, 3, 12, 3, 6, 15, 7) ? 2 : 0;
+  });
+  label_components(s.states, s.grid, s.labels, s.segments, 1, true);
+  ASSERT_NE(s.at(0, 0, 2), s.at(29, 0, 2)) << "the strips are apart before the grouping";
+  group_objects(s.grid, s.labels, s.segments, Params::defaults());
+  ASSERT_EQ(s.at(0, 0, 2), s.at(29, 0, 2)) << "rule 6 joins the strips across the gap";
+  const std::size_t before = s.segments.size();
+  split_support_planes(s.grid, s.labels, s.segments, 256, true);
+  ASSERT_EQ(s.segments.size(), before + 1) << "the box only";
+  const std::uint32_t floor = s.at(0, 0, 2), box = s.at(4, 13, 5);
+  EXPECT_NE(box, floor);
+  EXPECT_EQ(s.at(29, 29, 2), floor);
+  EXPECT_EQ(s.segments[floor].voxels, 29u * 30);
+  EXPECT_EQ(s.segments[box].voxels, 4u * 4 * 5);
+  EXPECT_EQ(s.segments[floor].bbox_max[0], 29u);
 }
 
 TEST(Planes, OffSmallPlanesAndSmallBumpsDoNotSplit) {

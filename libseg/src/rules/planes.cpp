@@ -539,22 +539,26 @@ class Splitter {
     std::vector<std::pair<std::uint32_t, std::uint32_t>> parts;  // (first voxel, temporary label)
     for (std::size_t k : split) parts.push_back({pieces_[k].first, temp(k)});
     std::size_t next = pieces_.size();
-    // Kept components after the first that are smaller than an object (a few voxels cut off by a
-    // split piece) join a split piece they touch instead of becoming segments of their own.
+    // Kept components after the first: one that touches no split piece was not cut off by the
+    // split (rule 6 joined it to the rest across unknown gaps: rings of returns on a ceiling) and
+    // stays in s; one that does was cut off, and becomes a segment of its own, or joins the first
+    // split piece it touches when smaller than an object (a few voxels under an overhang).
     std::vector<std::size_t> join(pieces_.size(), 0);  // for kept components: piece index + 1
     for (std::uint32_t v : members_) {
       if (labels_[v] != kKeep) continue;
       std::vector<std::uint32_t> voxels;
       flood(v, kKeep, temp(next), [&](std::uint32_t w) { voxels.push_back(w); });
-      std::size_t into = 0;
-      if (next > pieces_.size() && voxels.size() < kMinObjectVoxels)
+      std::size_t into = 0;  // the first split piece it touches, + 1
+      if (next > pieces_.size())
         for (std::size_t i = 0; i < voxels.size() && !into; ++i)
           for_neighbours(voxels[i], [&](std::size_t w) {
             const std::uint32_t l = labels_[w];
             if (!into && l > kKeep - 1 - pieces_.size() && l < kKeep && is_split[kKeep - 1 - l]) into = kKeep - l;
           });
+      const bool cut_off = into != 0;
+      if (voxels.size() >= kMinObjectVoxels) into = 0;
       join.push_back(into);
-      if (!into) parts.push_back({v, temp(next)});
+      if (cut_off && !into) parts.push_back({v, temp(next)});
       ++next;
     }
     std::sort(parts.begin(), parts.end());
