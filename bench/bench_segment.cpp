@@ -5,12 +5,16 @@
 // With "context" every call goes through one occseg::Context (its threads kept), and each result
 // not kept is handed back with Context::recycle, as a program segmenting map after map would;
 // "context-fresh" keeps the threads but recycles nothing (every call gets fresh label memory).
+// OCCSEG_BENCH_VOXEL_SIZE=METRES: the map's voxel edge (default 1; a .npy holds none), which the
+// default preset's rule 11 reads (structure_extent is in metres): the simulated buildings need
+// 0.05, as `occseg segment --voxel-size 0.05` gives them.
 // OCCSEG_BENCH_ISA=scalar|sse2|avx2|avx512|avx512vbmi caps the kernels of every stage at that
 // instruction-set level (kernels/isa.hpp; the fastest the processor has by default), to compare
 // them side by side (unset or empty: no cap); a level the processor lacks gives the highest one
 // below it.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -72,7 +76,16 @@ int main(int argc, char** argv) {
                                                      std::string(argv[6]) == "context-fresh"))) &&
                         std::string(argv[1]) == "time";
     if (timing) {
-      const Grid g = grid_from_npy(read_npy(argv[2]), 1.0, argv[2]);
+      double voxel_size = 1.0;
+      if (const char* v = std::getenv("OCCSEG_BENCH_VOXEL_SIZE"); v && *v) {
+        char* end = nullptr;
+        voxel_size = std::strtod(v, &end);
+        if (*end || !(voxel_size > 0) || !std::isfinite(voxel_size)) {
+          std::fprintf(stderr, "occseg_bench_segment: OCCSEG_BENCH_VOXEL_SIZE=%s is not a positive number\n", v);
+          return 2;
+        }
+      }
+      const Grid g = grid_from_npy(read_npy(argv[2]), voxel_size, argv[2]);
       std::optional<kernels::ScopedIsa> isa;  // (on this thread, which runs every call)
       if (const char* level = std::getenv("OCCSEG_BENCH_ISA"); level && *level) {
         const kernels::Isa* found = nullptr;

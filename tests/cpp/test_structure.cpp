@@ -281,6 +281,33 @@ TEST(Structure, SegmentsLyingInAStructuralPlaneFarFromItsPieceJoinIt) {
   for (std::size_t i = 0; i < s.segments.size(); ++i) EXPECT_EQ(s.segments[i].id, i);
 }
 
+TEST(Structure, SegmentsLyingInTwoOfItsPlanesAtACornerJoinIt) {
+  // The room of FloorAndWallAre... and, 2.2 m beyond the end of its wall along y, free space
+  // between: a strip of its corner (y 60-75), the wall's x = 2 for z 2-9 and the floor's z = 2 for
+  // x 3-9, 15 voxels a row. 9 of them lie within a voxel edge of the wall's plane and 9 of the
+  // floor's (60 % each): in neither plane alone, in the two together. It joins the structure
+  // segment. A strip of the same shape at x 20-27 (its "wall" in no plane of the room) stays apart.
+  Scene s({40, 80, 30}, 0.1, [](int x, int y, int z) {
+    if (y <= 39) return room_with_box(x, y, z);
+    if (y >= 60 && y <= 75 && ((x == 2 && z >= 2 && z <= 9) || (z == 2 && x >= 3 && x <= 9))) return O;
+    if (y >= 60 && y <= 75 && ((x == 20 && z >= 2 && z <= 9) || (z == 2 && x >= 21 && x <= 27))) return O;
+    if (z < 2 || x < 2) return U;
+    return F;
+  });
+  s.run(structure_only());
+  const std::uint32_t shell = s.at(2, 30, 20);
+  EXPECT_EQ(s.segments[shell].kind, Kind::structure);
+  EXPECT_EQ(s.at(2, 60, 9), shell);
+  EXPECT_EQ(s.at(9, 75, 2), shell);
+  const std::uint32_t other = s.at(20, 60, 9);
+  EXPECT_NE(other, shell);
+  EXPECT_EQ(s.at(27, 75, 2), other);
+  EXPECT_EQ(s.segments[other].kind, Kind::object);
+  std::uint64_t in_shell = 0;
+  for (std::size_t i = 0; i < s.labels.size(); ++i) in_shell += s.labels[i] == shell;
+  EXPECT_EQ(s.segments[shell].voxels, in_shell);
+}
+
 TEST(Structure, SegmentsLyingInAWideUnstructuralPieceOfTheShellJoinIt) {
   // 10 cm voxels: a floor (z = 2) and a wall (x = 2) 5.7 m long up to a ceiling at z = 27 seen
   // in rows along x every 6 voxels (unknown between them: rings too far apart for rule 6) joined

@@ -1060,62 +1060,95 @@ class Structure {
 
   // Small occupied groups lying in a piece's plane, inside its extent, join its segment; the
   // others that are not structure (small ones included) join a structure segment when most of
-  // their voxels lie in the plane of one of its structural pieces, or else of its wide ones
-  // (wide_), wherever in the plane (see kCoplanarPercent).
+  // their voxels lie in the planes of its structural and wide pieces (wide_), wherever in the
+  // planes (see kCoplanarPercent).
   void attract_fragments() {
     if (pieces_.empty()) return;
     const std::size_t S = segs_.size();
     std::vector<std::uint32_t> into(S, ~0u);
-    bool any = false;
-    std::vector<std::uint32_t> vox;
     const double m = margin_;
-    // Whether the voxels of segment f (vox) lie in piece pc's plane, all but off_plane of them,
-    // and inside its extent widened by the margin when `extent`.
-    const auto lies_in = [&](const Piece& pc, std::size_t off_plane, bool extent) {
-      std::size_t off = 0;
-      for (std::size_t i = 0; i < vox.size() && off <= off_plane; ++i) {
-        const Vec c = coords(vox[i]);
-        bool in = std::fabs(pc.pl.distance(c[0], c[1], c[2])) <= 1.0;
-        if (in && extent) {
-          const double a = dot(c, pc.u), b = dot(c, pc.v);
-          in = a >= pc.u0 - m && a <= pc.u1 + m && b >= pc.v0 - m && b <= pc.v1 + m;
+    // Each structure segment's surfaces: its structural pieces, then its wide ones; the segments
+    // in order of their first structural piece, then those with wide pieces only.
+    std::vector<std::pair<std::uint32_t, std::vector<const Piece*>>> surfaces;
+    {
+      std::vector<std::uint32_t> slot(S, ~0u);
+      for (const std::vector<Piece>* list : {&pieces_, &wide_})
+        for (const Piece& pc : *list) {
+          if (!pc.structural && list != &wide_) continue;
+          if (slot[pc.segment] == ~0u) {
+            slot[pc.segment] = static_cast<std::uint32_t>(surfaces.size());
+            surfaces.push_back({pc.segment, {}});
+          }
+          surfaces[slot[pc.segment]].second.push_back(&pc);
         }
-        off += !in;
+    }
+    // Whether the voxels of a segment (their centres `pts`) lie within one voxel edge of these
+    // planes, all but off_plane of them: of the one of each orientation that holds most of them (a
+    // fragment at a corner lies in two; parallel planes, a floor's and a bench's, are not added
+    // up).
+    const auto lies_on = [&](const std::vector<Vec>& pts, const std::vector<const Piece*>& planes,
+                             std::size_t off_plane) {
+      const Piece* best[3] = {nullptr, nullptr, nullptr};
+      std::size_t most[3] = {0, 0, 0};
+      for (const Piece* pc : planes) {
+        std::size_t n = 0;
+        for (const Vec& c : pts) n += std::fabs(pc->pl.distance(c[0], c[1], c[2])) <= 1.0;
+        if (n > most[pc->axis]) most[pc->axis] = n, best[pc->axis] = pc;
+      }
+      if (most[0] + most[1] + most[2] + off_plane < pts.size()) return false;
+      std::size_t off = 0;
+      for (const Vec& c : pts) {
+        bool on = false;
+        for (const Piece* pc : best) on = on || (pc && std::fabs(pc->pl.distance(c[0], c[1], c[2])) <= 1.0);
+        off += !on;
       }
       return off <= off_plane;
     };
-    for (std::size_t f = 0; f < S; ++f) {
-      const Segment& seg = segs_[f];
-      if (seg.state != State::occupied || seg.kind == Kind::structure) continue;
-      // (A small one is never a candidate, so never a piece's segment.)
-      const bool small = seg.voxels < min_object_ && seg.voxels < 2 * min_plane_;
-      vox.clear();
-      list_members(static_cast<std::uint32_t>(f), vox);
-      if (small) {
-        for (const Piece& pc : pieces_) {
-          bool near = pc.segment != f;
-          for (int k = 0; k < 3 && near; ++k)
-            near = double(seg.bbox_max[k]) + m >= double(pc.lo[k]) && double(seg.bbox_min[k]) <= double(pc.hi[k]) + m;
-          if (near && lies_in(pc, 0, true)) {
-            into[f] = pc.segment;
-            break;
-          }
-        }
+    // Whether they all lie in piece pc's plane, inside its extent widened by the margin.
+    const auto lies_in = [&](const std::vector<Vec>& pts, const Piece& pc) {
+      for (const Vec& c : pts) {
+        if (std::fabs(pc.pl.distance(c[0], c[1], c[2])) > 1.0) return false;
+        const double a = dot(c, pc.u), b = dot(c, pc.v);
+        if (a < pc.u0 - m || a > pc.u1 + m || b < pc.v0 - m || b > pc.v1 + m) return false;
       }
-      if (into[f] == ~0u) {  // (a small one too: a speckle lying in a wall's plane, beyond its piece)
-        // It may leave this many of its voxels off the plane.
-        const std::size_t off_plane = vox.size() * (100 - kCoplanarPercent) / 100;
-        for (const std::vector<Piece>* list : {&pieces_, &wide_}) {
-          for (const Piece& pc : *list)
-            if (pc.segment != f && (pc.structural || list == &wide_) && lies_in(pc, off_plane, false)) {
+      return true;
+    };
+    // (Segment by segment on the threads: each decision reads only the labels and the pieces.)
+    parallel_for_dynamic(S, p_.threads, [&](std::size_t f0, std::size_t f1) {
+      std::vector<std::uint32_t> vox;
+      std::vector<Vec> pts;
+      for (std::size_t f = f0; f < f1; ++f) {
+        const Segment& seg = segs_[f];
+        if (seg.state != State::occupied || seg.kind == Kind::structure) continue;
+        // (A small one is never a candidate, so never a piece's segment.)
+        const bool small = seg.voxels < min_object_ && seg.voxels < 2 * min_plane_;
+        vox.clear();
+        list_members(static_cast<std::uint32_t>(f), vox);
+        pts.resize(vox.size());
+        for (std::size_t i = 0; i < vox.size(); ++i) pts[i] = coords(vox[i]);
+        if (small) {
+          for (const Piece& pc : pieces_) {
+            bool near = pc.segment != f;
+            for (int k = 0; k < 3 && near; ++k)
+              near = double(seg.bbox_max[k]) + m >= double(pc.lo[k]) && double(seg.bbox_min[k]) <= double(pc.hi[k]) + m;
+            if (near && lies_in(pts, pc)) {
               into[f] = pc.segment;
               break;
             }
-          if (into[f] != ~0u) break;
+          }
+        }
+        if (into[f] == ~0u) {  // (a small one too: a speckle lying in a wall's plane, beyond its piece)
+          // It may leave this many of its voxels off the planes.
+          const std::size_t off_plane = vox.size() * (100 - kCoplanarPercent) / 100;
+          for (const auto& [t, planes] : surfaces)
+            if (t != f && lies_on(pts, planes, off_plane)) {
+              into[f] = t;
+              break;
+            }
         }
       }
-      any = any || into[f] != ~0u;
-    }
+    });
+    const bool any = std::any_of(into.begin(), into.end(), [](std::uint32_t t) { return t != ~0u; });
     // A small one may have joined a larger one that joined a structure segment: it goes there too
     // (structure segments join nothing, so every chain ends within two steps).
     for (std::size_t f = 0; f < S; ++f)
