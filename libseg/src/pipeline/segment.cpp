@@ -256,7 +256,6 @@ Result segment_into(const Grid& input, const Params& requested, bool keep_stages
     local.unknown_bits = std::vector<std::uint64_t>();
     local.occupied_bits = std::vector<std::uint64_t>();
   }
-  detail::release_freed_memory();
   st.begin("labelling");
   // The states go in: they are freed inside, before the segment statistics.
   detail::label_components(std::move(states), grid, r.labels, r.segments, params.threads,
@@ -269,9 +268,9 @@ Result segment_into(const Grid& input, const Params& requested, bool keep_stages
     group_objects(grid, r.labels, r.segments, params, &band_voxels);
     // Rule 11 before rule 5: a segment it makes structure (several planes) is not split again at
     // its largest plane alone (which would cut the walls off a floor as objects standing on it).
-    // The grouping's scratch and the segment table of before the grouping (72 bytes a segment:
-    // 1.4 bytes per voxel of a noisy map) go back to the system before rule 11 allocates.
-    detail::release_freed_memory();
+    // (Nothing is handed back to the system between the steps: what one frees the next reuses,
+    // and pages handed back are faulted in and zeroed again by the next call; docs/performance.md,
+    // "Memory handed back to the system".)
     std::vector<PlanePiece> pieces;
     split_structure(grid, r.labels, r.segments, params, k, params.plane_holes > 0 ? &pieces : nullptr);
     // Rule 12 on rule 11's pieces, before rule 5 looks at what its planes see.

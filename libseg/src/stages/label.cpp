@@ -684,10 +684,9 @@ void label_components(UninitVector<std::uint8_t>&& states, const Grid& grid, Lab
 void detail::label_components(UninitVector<std::uint8_t>&& states, const Grid& grid, LabelArray& labels,
                               std::vector<Segment>& segments, int threads, bool occupied26,
                               std::vector<std::uint8_t>& run_starts, const kernels::Table& k) {
-  // (The states' pages go back at once: after a first call glibc takes blocks of their size from
-  // its heap, where a free keeps them resident through the statistics.)
-  label_states(states.data(), [&] { states = UninitVector<std::uint8_t>(); release_freed_memory(); }, grid, labels,
-               segments, threads, occupied26, run_starts, k);
+  // (The states are freed before the statistics, for the statistics' table to reuse.)
+  label_states(states.data(), [&] { states = UninitVector<std::uint8_t>(); }, grid, labels, segments, threads,
+               occupied26, run_starts, k);
 }
 
 }  // namespace occseg
