@@ -151,8 +151,15 @@ class Structure {
       }
       std::vector<std::unique_ptr<Structure>> batch(c1 - c0);
       for (auto& e : batch) e = std::make_unique<Structure>(g_, labels_, segs_, p_, k_);
+      // Largest first: the threads take them in that order, so a large one is not left for last
+      // (the searches are independent; the splits below keep candidate order).
+      std::vector<std::size_t> order(batch.size());
+      std::iota(order.begin(), order.end(), std::size_t{0});
+      std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+        return segs_[candidates[c0 + a]].voxels > segs_[candidates[c0 + b]].voxels;
+      });
       parallel_for_dynamic(batch.size(), p_.threads, [&](std::size_t b, std::size_t e) {
-        for (std::size_t i = b; i < e; ++i) search_one(*batch[i], c0 + i);
+        for (std::size_t i = b; i < e; ++i) search_one(*batch[order[i]], c0 + order[i]);
       });
       for (auto& e : batch) {
         e->apply();
