@@ -138,6 +138,64 @@ TEST(KernelsRefine, WindowStarts) {
   EXPECT_GT(started, 1000u);
 }
 
+TEST(KernelsRefine, PlaneRow) {
+  // A plane of `rows` window rows after the row before, laid out forward (rs = +nx) or backward
+  // (rs = -nx: window row w above row 0 in memory): lanes boundary-heavy or not, running windows,
+  // window rows of the boundary voxel's state or not, own states of every kind.
+  test::Rng r(7);
+  std::size_t started = 0, moved = 0;
+  for_each_isa([&](kernels::Isa) {
+    const kernels::RefineKernels& k = kernels::active().refine;
+    for (std::size_t nx : lengths())
+      for (int rows : {1, 2, 3, 4, 8, 63, 64})
+        for (int step : {+1, -1})
+          for (double other : {0.0, 0.2, 1.0}) {
+            const std::size_t W = (nx + 63) / 64;
+            const std::size_t total = (static_cast<std::size_t>(rows) + 1) * nx;
+            std::vector<std::uint8_t> plane(total + 1);
+            const std::uint8_t base = r.uniform() < 0.5 ? 0 : 2;
+            for (std::size_t i = 0; i < total; ++i)
+              plane[i] = r.uniform() < other ? static_cast<std::uint8_t>(r.below(3)) : base;
+            // the row before first in scan order; the window rows follow it in scan order
+            const std::ptrdiff_t rs = step > 0 ? static_cast<std::ptrdiff_t>(nx) : -static_cast<std::ptrdiff_t>(nx);
+            const std::size_t prev_at = step > 0 ? 0 : static_cast<std::size_t>(rows) * nx;
+            for (std::size_t x = 0; x < nx; ++x)  // the row before: mostly the other state
+              if (r.uniform() < 0.7) plane[prev_at + x] = static_cast<std::uint8_t>(2 - plane[prev_at + x]);
+            std::vector<std::uint8_t> skip(nx);
+            for (auto& v : skip) v = r.uniform() < 0.7 ? 0 : static_cast<std::uint8_t>(r.below(5));
+            std::vector<std::vector<std::uint64_t>> o(static_cast<std::size_t>(rows)), u(o);
+            const detail::word_t* occ[64];
+            const detail::word_t* unk[64];
+            for (int w = 0; w < rows; ++w) {
+              o[std::size_t(w)] = bits(r, nx, r.uniform());
+              u[std::size_t(w)] = bits(r, nx, r.uniform());
+              for (std::size_t i = 0; i < W; ++i) u[std::size_t(w)][i] &= ~o[std::size_t(w)][i];  // one state each
+            }
+            for (int w = 0; w < rows; ++w) {
+              occ[w] = words(o[std::size_t(w)]);
+              unk[w] = words(u[std::size_t(w)]);
+            }
+            const auto before = plane;
+            auto want_plane = plane;
+            auto want_skip = skip;
+            const std::ptrdiff_t cur_at = static_cast<std::ptrdiff_t>(prev_at) + rs;
+            const kernels::PlaneRow got = k.plane_row(plane.data() + prev_at, plane.data() + cur_at, rs, rows,
+                                                      skip.data(), nx, occ, unk);
+            const kernels::PlaneRow want =
+                scalar_kernels().plane_row(want_plane.data() + prev_at, want_plane.data() + cur_at, rs, rows,
+                                           want_skip.data(), nx, occ, unk);
+            ASSERT_EQ(got.started, want.started) << nx << " rows " << rows << " step " << step;
+            ASSERT_EQ(got.occupied_rows, want.occupied_rows) << nx << " rows " << rows << " step " << step;
+            ASSERT_EQ(plane, want_plane) << nx << " rows " << rows << " step " << step;
+            ASSERT_EQ(skip, want_skip) << nx << " rows " << rows << " step " << step;
+            started += want.started;
+            for (std::size_t i = 0; i < total; ++i) moved += want_plane[i] != before[i];
+          }
+  });
+  EXPECT_GT(started, 1000u);
+  EXPECT_GT(moved, 1000u);
+}
+
 TEST(KernelsRefine, PackStatesAndPackEqual) {
   test::Rng r(4);
   for_each_isa([&](kernels::Isa) {

@@ -10,6 +10,7 @@ void select_refine(RefineKernels& k, Isa cap) {
   k.any_occupied = scalar::any_occupied;
   k.next_boundary = scalar::next_boundary;
   k.window_starts = scalar::window_starts;
+  k.plane_row = scalar::plane_row;
   k.pack_states = scalar::pack_states;
   k.pack_equal = scalar::pack_equal;
   k.unpack_unknown = scalar::unpack_unknown;
@@ -18,6 +19,7 @@ void select_refine(RefineKernels& k, Isa cap) {
   if (cap >= Isa::sse2) {
     k.next_boundary = sse2::next_boundary;
     k.window_starts = sse2::window_starts;
+    k.plane_row = sse2::plane_row;
     k.pack_states = sse2::pack_states;
     k.pack_equal = sse2::pack_equal;
     k.unpack_unknown = sse2::unpack_unknown;
@@ -30,6 +32,7 @@ void select_refine(RefineKernels& k, Isa cap) {
     k.pack_states = avx2::pack_states;
     k.write_cells_row = avx2::write_cells_row;
   }
+  if (cap >= Isa::avx512 && cpu_has_avx512()) k.plane_row = avx512::plane_row;
 #endif
 }
 

@@ -71,20 +71,9 @@ void reassign_window(const std::uint8_t* own, int n, std::uint8_t from, bool* mo
   for (int k = 0; k < n; ++k) moves[k] = for_from && (!for_into || own[k] != into);
 }
 
-// reassign_window() on a window of the own states' bits, as masks of its n voxels (bit k: voxel
-// k; `all` the n bits): `occ` the voxels whose own state is occupied, `unk()` those whose own
-// state is unknown (read only when needed). Returns the voxels that move to `from`. The occupied
-// bits come first: where they show no voxel on `from`'s side (entering an object whose voxels are
-// all occupied, or leaving one into space with none), the window is case (i) or (ii) whatever its
-// unknown bits, and they are not read. That decides most windows.
-template <class Unknown>
-inline std::uint64_t window_moves(std::uint64_t occ, std::uint64_t all, std::uint8_t from, Unknown&& unk) {
-  if (from == kFree ? occ == all : occ == 0) return 0;
-  const std::uint64_t unknown = unk() & ~occ, free = all & ~occ & ~unknown;
-  const std::uint64_t for_from = from == kFree ? free : occ, for_into = from == kFree ? occ : free;
-  if (!for_from) return 0;                  // (i), (ii)
-  return for_into ? all & ~for_into : all;  // (iv) : (iii)
-}
+// reassign_window() on a window of the own states' bits, as masks of its voxels: the kernels'
+// kernels::window_moves(), which the plane scans' kernel (plane_row) applies too.
+using kernels::window_moves;
 
 inline std::uint64_t low_bits(int n) { return n >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << n) - 1; }
 
@@ -136,42 +125,14 @@ inline Plane plane_shape(const Dims& d, int axis) {
   return axis == 1 ? Plane{d.ny, static_cast<std::ptrdiff_t>(d.nx)} : Plane{d.nz, static_cast<std::ptrdiff_t>(d.nx * d.ny)};
 }
 
-// The window of lane x at row k of a plane scan (`cur`: that row; rows `rs` apart in scan order);
-// returns the voxels of the window after the first (the lane's new skip count). The own states of
-// scan row k + w are in row orow + w * ors of `own`. A window that writes occupied voxels marks
-// their rows in `occ` (the flag of row k + w is occ_k[w * fs]).
-inline std::uint8_t plane_window(std::uint8_t* cur, const OwnBits& own, std::size_t orow, std::ptrdiff_t ors,
-                                 std::size_t x, std::ptrdiff_t rs, std::size_t k, std::size_t rows, int look,
-                                 std::uint8_t from, std::uint8_t* occ_k, std::ptrdiff_t fs) {
-  std::uint8_t* const c = cur + x;
-  const int n = window_length(c, rs, rows - k, look);
-  // (lane x: the same bit of every row's words)
-  const std::size_t i0 = orow * own.words + x / 64;
-  const std::ptrdiff_t di = ors * static_cast<std::ptrdiff_t>(own.words);
-  const auto b = static_cast<unsigned>(x % 64);
-  const auto lane = [&](const word_t* words) {
-    std::uint64_t m = 0;
-    for (int w = 0; w < n; ++w)
-      m |= ((words[static_cast<std::size_t>(static_cast<std::ptrdiff_t>(i0) + w * di)] >> b) & 1u) << w;
-    return m;
-  };
-  std::uint64_t moves = window_moves(lane(own.occupied), low_bits(n), from, [&] { return lane(own.unknown); });
-  for (; moves; moves &= moves - 1) {
-    const int w = __builtin_ctzll(moves);
-    c[w * rs] = from;
-    if (from == kOccupied) occ_k[w * fs] = 1;
-  }
-  return static_cast<std::uint8_t>(n - 1);  // resume after the window
-}
-
-// One plane's lines, scanned forward or backward. A free/occupied pair needs an occupied voxel in
-// one of its two rows, so a pair of rows without one (flags in `occ`: row r at occ[r * occ_row], a
-// superset kept by the windows) is skipped unread; running windows still count down there. Row r
-// of the plane has its own states in row orow0 + r * occ_row of `own` (the flags are per row of
-// the map too). `skip` and `lanes`: nx entries of scratch.
+// One plane's lines, scanned forward or backward, a row of all of them at a time (the kernel's
+// plane_row: lanes are independent, a window writes its own lane only). A free/occupied pair
+// needs an occupied voxel in one of its two rows, so a pair of rows without one (flags in `occ`:
+// row r at occ[r * occ_row], a superset kept by the windows) is skipped unread; running windows
+// still count down there. Row r of the plane has its own states in row orow0 + r * occ_row of
+// `own` (the flags are per row of the map too). `skip`: nx entries of scratch.
 void scan_plane(std::uint8_t* st, const OwnBits& own, std::size_t orow0, std::size_t nx, Plane pl, int step, int look,
-                std::uint8_t* skip, std::uint32_t* lanes, std::uint8_t* occ, std::ptrdiff_t occ_row,
-                const kernels::RefineKernels& kr) {
+                std::uint8_t* skip, std::uint8_t* occ, std::ptrdiff_t occ_row, const kernels::RefineKernels& kr) {
   std::fill(skip, skip + nx, 0);
   const std::ptrdiff_t rs = pl.row * step;  // signed distance from one row to the next in scan order
   const std::ptrdiff_t fs = occ_row * step;  // the same for the rows' flags (and own states' rows)
@@ -191,13 +152,18 @@ void scan_plane(std::uint8_t* st, const OwnBits& own, std::size_t orow0, std::si
       continue;
     }
     // A lane starts a window where it sees a boundary and has none running; running windows count
-    // down. Lanes are independent: a window writes its own lane only.
-    const std::size_t starts = kr.window_starts(prev, cur, skip, nx, lanes);
-    for (std::size_t j = 0; j < starts; ++j) {
-      const std::size_t x = lanes[j];
-      skip[x] = plane_window(cur, own, ocur, fs, x, rs, k, pl.rows, look, prev[x], fk, fs);
+    // down. Window row w is scan row k + w, its own states in row ocur + w * fs of `own`.
+    const int rows = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(look), pl.rows - k));
+    const word_t* occ_rows[kMaxLook];
+    const word_t* unk_rows[kMaxLook];
+    for (int w = 0; w < rows; ++w) {
+      const std::size_t at = static_cast<std::size_t>(static_cast<std::ptrdiff_t>(ocur) + w * fs) * own.words;
+      occ_rows[w] = own.occupied + at;
+      unk_rows[w] = own.unknown + at;
     }
-    if (starts) last_start = k;
+    const kernels::PlaneRow done = kr.plane_row(prev, cur, rs, rows, skip, nx, occ_rows, unk_rows);
+    for (std::uint64_t m = done.occupied_rows; m; m &= m - 1) fk[__builtin_ctzll(m) * fs] = 1;
+    if (done.started) last_start = k;
   }
 }
 
@@ -232,14 +198,13 @@ void run_sweeps(std::uint8_t* states, const OwnBits& own, const Dims& d, int thr
   const auto row = [&](std::size_t first, int step) {
     if (occ[first / d.nx]) scan_row(st + first, own, first / d.nx, d.nx, step, look, kr);
   };
-  const auto plane = [&](const Sweep& s, std::size_t o, std::uint8_t* skip, std::uint32_t* lanes, int step) {
+  const auto plane = [&](const Sweep& s, std::size_t o, std::uint8_t* skip, int step) {
     const Plane pl = plane_shape(d, s.axis);
     const std::size_t base = plane_base(d, s.axis, o);
     if (s.axis == 1)  // rows y of plane z = o: rows d.ny * o + y of the map
-      scan_plane(st + base, own, d.ny * o, d.nx, pl, step, look, skip, lanes, occ + d.ny * o, 1, kr);
+      scan_plane(st + base, own, d.ny * o, d.nx, pl, step, look, skip, occ + d.ny * o, 1, kr);
     else  // rows z of slice y = o: rows o + d.ny * z
-      scan_plane(st + base, own, o, d.nx, pl, step, look, skip, lanes, occ + o, static_cast<std::ptrdiff_t>(d.ny),
-                 kr);
+      scan_plane(st + base, own, o, d.nx, pl, step, look, skip, occ + o, static_cast<std::ptrdiff_t>(d.ny), kr);
   };
   for (std::size_t g = 0; g < sweeps.size();) {
     // The group's other axis: y (planes of fixed z) or z (slices of fixed y); a lone x sweep
@@ -257,7 +222,6 @@ void run_sweeps(std::uint8_t* states, const OwnBits& own, const Dims& d, int thr
     const std::size_t rows = by_z ? d.ny : d.nz, stride = by_z ? d.nx : d.nx * d.ny;
     parallel_for_dynamic(by_z ? d.nz : d.ny, threads, [&](std::size_t o0, std::size_t o1) {
       std::vector<std::uint8_t> skip(d.nx);
-      std::vector<std::uint32_t> lanes(d.nx);
       for (std::size_t o = o0; o < o1; ++o) {
         const std::size_t first = by_z ? d.nx * d.ny * o : d.nx * o;
         if (flag_rows)
@@ -273,8 +237,8 @@ void run_sweeps(std::uint8_t* states, const OwnBits& own, const Dims& d, int thr
               row(first + r * stride, -1);
             }
           } else {
-            plane(s, o, skip.data(), lanes.data(), +1);
-            plane(s, o, skip.data(), lanes.data(), -1);
+            plane(s, o, skip.data(), +1);
+            plane(s, o, skip.data(), -1);
           }
         }
       }

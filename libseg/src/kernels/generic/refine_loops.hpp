@@ -54,6 +54,35 @@ __attribute__((always_inline)) inline std::size_t window_starts_from(const std::
   return count;
 }
 
+// The windows of plane_row() for the lanes listed (count of them, increasing), their skips set.
+__attribute__((always_inline)) inline PlaneRow lane_windows(const std::uint8_t* prev, std::uint8_t* cur,
+                                                            std::ptrdiff_t rs, int rows, std::uint8_t* skip,
+                                                            const std::uint32_t* lanes, std::size_t count,
+                                                            const word_t* const* occ, const word_t* const* unk) {
+  PlaneRow r;
+  r.started = count != 0;
+  for (std::size_t j = 0; j < count; ++j) {
+    const std::size_t x = lanes[j];
+    std::uint8_t* const c = cur + x;
+    int n = 1;  // the window's voxels: c[0] and those after it equal to it
+    while (n < rows && c[n * rs] == c[0]) ++n;
+    const std::size_t i = x / 64;
+    const unsigned b = x % 64;
+    const auto lane = [&](const word_t* const* w) {
+      std::uint64_t m = 0;
+      for (int k = 0; k < n; ++k) m |= ((w[k][i] >> b) & 1u) << k;
+      return m;
+    };
+    const std::uint8_t from = prev[x];
+    const std::uint64_t all = n >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << n) - 1;
+    std::uint64_t moves = window_moves(lane(occ), all, from, [&] { return lane(unk); });
+    if (from == kOccupied) r.occupied_rows |= moves;
+    for (; moves; moves &= moves - 1) c[__builtin_ctzll(moves) * rs] = from;
+    skip[x] = static_cast<std::uint8_t>(n - 1);
+  }
+  return r;
+}
+
 // Bits [x, nx) of pack_states() (the words cleared already).
 __attribute__((always_inline)) inline void pack_states_from(const std::uint8_t* st, std::size_t x, std::size_t nx,
                                                             word_t* unknown, word_t* free) {
