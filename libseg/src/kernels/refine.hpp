@@ -107,6 +107,8 @@ bool any_boundary(const std::uint8_t* a, const std::uint8_t* b, std::size_t n);
 bool any_occupied(const std::uint8_t* s, std::size_t n);
 void pack_states(const std::uint8_t* st, std::size_t nx, word_t* unknown, word_t* free);
 void write_cells_row(const std::uint8_t* cs, const word_t* w, std::size_t nx, std::uint8_t* st);
+PlaneRow plane_row(const std::uint8_t* prev, std::uint8_t* cur, std::ptrdiff_t rs, int rows, std::uint8_t* skip,
+                   std::size_t nx, const word_t* const* occ, const word_t* const* unk);
 }  // namespace avx2
 namespace avx512 {
 PlaneRow plane_row(const std::uint8_t* prev, std::uint8_t* cur, std::ptrdiff_t rs, int rows, std::uint8_t* skip,

@@ -31,6 +31,7 @@ void select_refine(RefineKernels& k, Isa cap) {
     k.any_occupied = avx2::any_occupied;
     k.pack_states = avx2::pack_states;
     k.write_cells_row = avx2::write_cells_row;
+    k.plane_row = avx2::plane_row;
   }
   if (cap >= Isa::avx512 && cpu_has_avx512()) k.plane_row = avx512::plane_row;
 #endif
