@@ -46,6 +46,24 @@ int room_with_box(int x, int y, int z) {
   return F;
 }
 
+// The room of room_with_box() (y <= 39) and beyond it along y free space (unknown under the
+// floor's plane and behind the wall's) holding the voxels `beyond` marks occupied.
+std::function<int(int, int, int)> room_and_beyond(std::function<bool(int, int, int)> beyond) {
+  return [beyond](int x, int y, int z) {
+    if (y <= 39) return room_with_box(x, y, z);
+    if (beyond(x, y, z)) return O;
+    if (z < 2 || x < 2) return U;
+    return F;
+  };
+}
+
+// How many voxels carry label `id`.
+std::uint64_t voxels_labelled(const LabelArray& labels, std::uint32_t id) {
+  std::uint64_t n = 0;
+  for (const std::uint32_t l : labels) n += l == id;
+  return n;
+}
+
 Params structure_only() {
   Params p;  // the default preset's values
   return p;
@@ -256,14 +274,10 @@ TEST(Structure, SegmentsLyingInAStructuralPlaneFarFromItsPieceJoinIt) {
   // and the speckle lie wholly in the wall's plane, far outside its piece's extent: they join the
   // structure segment. The block has 2 of its 5 layers within a voxel edge of the plane (40 %):
   // it stays apart.
-  Scene s({40, 80, 30}, 0.1, [](int x, int y, int z) {
-    if (y <= 39) return room_with_box(x, y, z);
-    if (x == 2 && in_box(x, y, z, 2, 60, 10, 2, 75, 15)) return O;
-    if (x == 2 && in_box(x, y, z, 2, 50, 12, 2, 51, 12)) return O;
-    if (in_box(x, y, z, 2, 60, 20, 6, 65, 25)) return O;
-    if (z < 2 || x < 2) return U;
-    return F;
-  });
+  Scene s({40, 80, 30}, 0.1, room_and_beyond([](int x, int y, int z) {
+            return (x == 2 && in_box(x, y, z, 2, 60, 10, 2, 75, 15)) ||
+                   (x == 2 && in_box(x, y, z, 2, 50, 12, 2, 51, 12)) || in_box(x, y, z, 2, 60, 20, 6, 65, 25);
+          }));
   s.run(structure_only());
   const std::uint32_t shell = s.at(2, 30, 20);
   EXPECT_EQ(s.segments[shell].kind, Kind::structure);
@@ -275,9 +289,7 @@ TEST(Structure, SegmentsLyingInAStructuralPlaneFarFromItsPieceJoinIt) {
   EXPECT_EQ(s.at(2, 60, 20), block);
   EXPECT_EQ(s.segments[block].kind, Kind::object);
   // The shell's statistics hold the strip: its voxels are counted in it.
-  std::uint64_t in_shell = 0;
-  for (std::size_t i = 0; i < s.labels.size(); ++i) in_shell += s.labels[i] == shell;
-  EXPECT_EQ(s.segments[shell].voxels, in_shell);
+  EXPECT_EQ(s.segments[shell].voxels, voxels_labelled(s.labels, shell));
   for (std::size_t i = 0; i < s.segments.size(); ++i) EXPECT_EQ(s.segments[i].id, i);
 }
 
@@ -287,13 +299,11 @@ TEST(Structure, SegmentsLyingInTwoOfItsPlanesAtACornerJoinIt) {
   // x 3-9, 15 voxels a row. 9 of them lie within a voxel edge of the wall's plane and 9 of the
   // floor's (60 % each): in neither plane alone, in the two together. It joins the structure
   // segment. A strip of the same shape at x 20-27 (its "wall" in no plane of the room) stays apart.
-  Scene s({40, 80, 30}, 0.1, [](int x, int y, int z) {
-    if (y <= 39) return room_with_box(x, y, z);
-    if (y >= 60 && y <= 75 && ((x == 2 && z >= 2 && z <= 9) || (z == 2 && x >= 3 && x <= 9))) return O;
-    if (y >= 60 && y <= 75 && ((x == 20 && z >= 2 && z <= 9) || (z == 2 && x >= 21 && x <= 27))) return O;
-    if (z < 2 || x < 2) return U;
-    return F;
-  });
+  Scene s({40, 80, 30}, 0.1, room_and_beyond([](int x, int y, int z) {
+            return y >= 60 && y <= 75 &&
+                   ((x == 2 && z >= 2 && z <= 9) || (z == 2 && x >= 3 && x <= 9) || (x == 20 && z >= 2 && z <= 9) ||
+                    (z == 2 && x >= 21 && x <= 27));
+          }));
   s.run(structure_only());
   const std::uint32_t shell = s.at(2, 30, 20);
   EXPECT_EQ(s.segments[shell].kind, Kind::structure);
@@ -303,9 +313,7 @@ TEST(Structure, SegmentsLyingInTwoOfItsPlanesAtACornerJoinIt) {
   EXPECT_NE(other, shell);
   EXPECT_EQ(s.at(27, 75, 2), other);
   EXPECT_EQ(s.segments[other].kind, Kind::object);
-  std::uint64_t in_shell = 0;
-  for (std::size_t i = 0; i < s.labels.size(); ++i) in_shell += s.labels[i] == shell;
-  EXPECT_EQ(s.segments[shell].voxels, in_shell);
+  EXPECT_EQ(s.segments[shell].voxels, voxels_labelled(s.labels, shell));
 }
 
 TEST(Structure, SegmentsLyingInAWideUnstructuralPieceOfTheShellJoinIt) {
