@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "occseg/parallel.hpp"
+#include "rules/box_rows.hpp"
 #include "rules/neighbours.hpp"
 
 namespace occseg {
@@ -315,7 +316,7 @@ class Splitter {
     for_sample(n, [&](std::size_t i) { ranks.push_back(i); });
     std::vector<Vec> pts;
     std::uint32_t first_voxel = 0;
-    collect_sample(s, first, ranks, first_voxel, pts);
+    collect_sample(s, first, ranks, first_voxel, pts, threads);
     Found f;
     Plane pl;
     if (!sample_plane(pts, 0x6F6363736567ull ^ (std::uint64_t(first_voxel) * 0x9E3779B97F4A7C15ull), pl, threads,
@@ -376,11 +377,11 @@ class Splitter {
   }
 
   // The coordinates of the voxels of s with the given ranks (ascending) in scan order, into pts.
-  // Without a bucket, rows are counted with the row_members kernel and only the few rows that
-  // hold a sampled rank are walked voxel by voxel (a branch per voxel of the sprawling boxes of a
-  // noisy map is slow).
+  // Without a bucket, rows are counted with the row_members kernel (on `threads` threads) and only
+  // the few rows that hold a sampled rank are walked voxel by voxel (a branch per voxel of the
+  // sprawling boxes of a noisy map is slow).
   void collect_sample(std::uint32_t s, const std::uint32_t* first, const std::vector<std::size_t>& ranks,
-                      std::uint32_t& first_voxel, std::vector<Vec>& pts) const {
+                      std::uint32_t& first_voxel, std::vector<Vec>& pts, int threads) const {
     if (first) {
       first_voxel = first[0];
       for (std::size_t r : ranks) pts.push_back(coords(first[r]));
@@ -388,24 +389,25 @@ class Splitter {
     }
     const Segment& seg = segs_[s];
     const std::size_t x0 = seg.bbox_min[0], x1 = seg.bbox_max[0] + 1;
+    const std::vector<std::uint32_t> counts = box_row_members(d_, labels_.data(), seg, s, threads, k_);
+    const std::size_t rows_y = std::size_t(seg.bbox_max[1] - seg.bbox_min[1]) + 1;
     std::vector<std::uint64_t> bits((x1 - x0 + 63) / 64);
     std::size_t rank = 0, next = 0;
-    for (std::size_t z = seg.bbox_min[2]; z <= seg.bbox_max[2] && next < ranks.size(); ++z)
-      for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1] && next < ranks.size(); ++y) {
-        const std::size_t row = g_.index(0, y, z);
-        const std::size_t c = k_.row_members(labels_.data() + row, x0, x1, s, bits.data());
-        if (rank + c <= ranks[next]) {  // (never the first row with a voxel of s: ranks[0] is 0)
-          rank += c;
-          continue;
-        }
-        for (std::size_t k = 0; k < bits.size(); ++k)
-          for (std::uint64_t w = bits[k]; w; w &= w - 1) {
-            const std::size_t x = x0 + 64 * k + static_cast<std::size_t>(__builtin_ctzll(w));
-            if (rank == 0) first_voxel = static_cast<std::uint32_t>(row + x);
-            if (next < ranks.size() && ranks[next] == rank) pts.push_back(coords(row + x)), ++next;
-            ++rank;
-          }
+    for (std::size_t r = 0; r < counts.size() && next < ranks.size(); ++r) {
+      if (rank + counts[r] <= ranks[next]) {  // (never the first row with a voxel of s: ranks[0] is 0)
+        rank += counts[r];
+        continue;
       }
+      const std::size_t row = g_.index(0, seg.bbox_min[1] + r % rows_y, seg.bbox_min[2] + r / rows_y);
+      k_.row_members(labels_.data() + row, x0, x1, s, bits.data());
+      for (std::size_t k = 0; k < bits.size(); ++k)
+        for (std::uint64_t w = bits[k]; w; w &= w - 1) {
+          const std::size_t x = x0 + 64 * k + static_cast<std::size_t>(__builtin_ctzll(w));
+          if (rank == 0) first_voxel = static_cast<std::uint32_t>(row + x);
+          if (next < ranks.size() && ranks[next] == rank) pts.push_back(coords(row + x)), ++next;
+          ++rank;
+        }
+    }
   }
 
   // members = the voxels of s in scan order: the bucket, or a scan of its box.

@@ -9,6 +9,7 @@
 #include <numeric>
 
 #include "occseg/parallel.hpp"
+#include "rules/box_rows.hpp"
 #include "rules/neighbours.hpp"
 #include "rules/objects.hpp"
 #include "rules/planes.hpp"
@@ -133,8 +134,9 @@ class Structure {
     // the other in order, exactly as one at a time. A batch holds candidates of at most
     // max(largest candidate, map / 256) voxels together, so its examiners' scratch (about 80
     // bytes per voxel examined) stays within the largest one's or a third of a byte per voxel.
-    const auto search_one = [&](Structure& e, std::size_t c) {
-      e.search(candidates[c], bucket.empty() ? nullptr : bucket.data() + start[c], start[c + 1] - start[c]);
+    // (A lone search counts its box's rows on the threads; those of a batch share them.)
+    const auto search_one = [&](Structure& e, std::size_t c, int threads) {
+      e.search(candidates[c], bucket.empty() ? nullptr : bucket.data() + start[c], start[c + 1] - start[c], threads);
     };
     std::size_t largest = 0;
     for (const std::uint32_t c : candidates) largest = std::max<std::size_t>(largest, segs_[c].voxels);
@@ -145,7 +147,7 @@ class Structure {
       for (c1 = c0 + 1; parallel && c1 < candidates.size() && sum + segs_[candidates[c1]].voxels <= budget; ++c1)
         sum += segs_[candidates[c1]].voxels;
       if (c1 == c0 + 1) {
-        search_one(*this, c0);
+        search_one(*this, c0, p_.threads);
         apply();
         continue;
       }
@@ -159,7 +161,7 @@ class Structure {
         return segs_[candidates[c0 + a]].voxels > segs_[candidates[c0 + b]].voxels;
       });
       parallel_for_dynamic(batch.size(), p_.threads, [&](std::size_t b, std::size_t e) {
-        for (std::size_t i = b; i < e; ++i) search_one(*batch[order[i]], c0 + order[i]);
+        for (std::size_t i = b; i < e; ++i) search_one(*batch[order[i]], c0 + order[i], 1);
       });
       for (auto& e : batch) {
         e->apply();
@@ -577,40 +579,40 @@ class Structure {
   }
 
   // examine()'s sample test on the same voxels (the members in scan order of the box, every
-  // n / k-th), found by scanning the box instead of reading a list.
-  bool has_surfaces_in_box(std::uint32_t s) const {
+  // n / k-th), found by scanning the box instead of reading a list: its rows counted on `threads`
+  // threads first (the region of noise this test rejects fills a third of its box), then only the
+  // rows holding a sample walked.
+  bool has_surfaces_in_box(std::uint32_t s, int threads) const {
     const Segment& seg = segs_[s];
     const std::size_t n = seg.voxels, k = std::min<std::size_t>(n, 4096);
+    const std::vector<std::uint32_t> counts = box_row_members(d_, labels_.data(), seg, s, threads, k_.planes);
+    const std::size_t rows_y = std::size_t(seg.bbox_max[1] - seg.bbox_min[1]) + 1;
     std::size_t seen = 0, next = 0, i = 0, surface = 0;
-    for (std::size_t z = seg.bbox_min[2]; z <= seg.bbox_max[2] && i < k; ++z)
-      for (std::size_t y = seg.bbox_min[1]; y <= seg.bbox_max[1] && i < k; ++y) {
-        const std::size_t row = g_.index(0, y, z), b = row + seg.bbox_min[0], e = row + seg.bbox_max[0] + 1;
-        // A row without the next sample is only counted (a compare and add that vectorises): the
-        // region of noise this test rejects fills a third of its box.
-        const auto members = static_cast<std::size_t>(std::count(labels_.data() + b, labels_.data() + e, s));
-        if (seen + members <= next) {
-          seen += members;
-          continue;
-        }
-        for_label(b, e, s, [&](std::size_t j) {
-          if (i >= k || seen++ != next) return;  // (the row's members past the last sample: none)
-          surface += thin_somewhere(s, coords(j));
-          next = ++i * n / k;
-        });
+    for (std::size_t r = 0; r < counts.size() && i < k; ++r) {
+      if (seen + counts[r] <= next) {
+        seen += counts[r];
+        continue;
       }
+      const std::size_t row = g_.index(0, seg.bbox_min[1] + r % rows_y, seg.bbox_min[2] + r / rows_y);
+      for_label(row + seg.bbox_min[0], row + seg.bbox_max[0] + 1, s, [&](std::size_t j) {
+        if (i >= k || seen++ != next) return;  // (the row's members past the last sample: none)
+        surface += thin_somewhere(s, coords(j));
+        next = ++i * n / k;
+      });
+    }
     return 100 * surface >= kMinSurfacePercent * k;
   }
 
   // Phase one of examining candidate s (reads only; apply() is phase two): its voxels are
   // [bucket, bucket + count) when the caller bucketed them, else (bucket = nullptr) found by
   // scanning its box after the sample test there.
-  void search(std::uint32_t s, const std::uint32_t* bucket, std::size_t count) {
+  void search(std::uint32_t s, const std::uint32_t* bucket, std::size_t count, int threads) {
     s_ = s;
     found_ = false;
     if (!bucket) {
       // The sample test first, by a scan of the box: a sprawling region of noise is rejected
       // before its voxels are listed (a list of 4 bytes per voxel of most of a noisy map).
-      if (!has_surfaces_in_box(s)) return;
+      if (!has_surfaces_in_box(s, threads)) return;
       list_members(s, listed_);
       members_ = {listed_.data(), listed_.size()};
     } else {
