@@ -126,3 +126,40 @@ TEST(Departures, GapConnectedToAnObjectIsNeverFree) {
     EXPECT_EQ(st[g.index(15, y, 10)], 0) << "a gap between rays stays free";
   }
 }
+
+// A floor (z = 0) of occupied voxels under a 2-voxel layer of 0.5 (ray gaps: thinner than the
+// 3-voxel cube of gap_radius 1) in free space, and a sheet of 0.5 (x = 20, 21) standing on that
+// layer up to the top of the map: its gap is connected to the floor only through the bottom
+// planes, so the flood climbs through every plane (and, on more threads, through every slab of
+// planes: the floor's 5,120 seeds take that path). A sheet touching nothing (x = 40, 41) stays
+// free. The same states on 1 to 4 threads.
+TEST(Departures, GapFloodOnThreadsClimbsThroughEveryPlane) {
+  Grid g(Dims{64, 80, 48}, 0.1f);
+  for (std::size_t z = 0; z < 48; ++z)
+    for (std::size_t y = 0; y < 80; ++y)
+      for (std::size_t x = 0; x < 64; ++x) {
+        float& v = g.at(x, y, z);
+        if (z == 0)
+          v = 0.9f;
+        else if (z <= 2 || x == 20 || x == 21 || ((x == 40 || x == 41) && y >= 10 && y <= 50 && z >= 10 && z <= 40))
+          v = 0.5f;
+      }
+  std::vector<std::uint8_t> want;
+  for (int threads : {1, 2, 3, 4}) {
+    Params p;
+    p.threads = threads;
+    std::vector<std::uint8_t> st(g.p.size(), 0);
+    apply_voxel_rules(st, g, p);
+    if (threads == 1) {
+      want = st;
+      EXPECT_EQ(st[g.index(20, 40, 47)], 1) << "the top of the standing sheet";
+      EXPECT_EQ(st[g.index(21, 79, 3)], 1);
+      EXPECT_EQ(st[g.index(10, 30, 2)], 1) << "the floor's layer";
+      EXPECT_EQ(st[g.index(40, 30, 30)], 0) << "the sheet touching nothing";
+      EXPECT_EQ(st[g.index(10, 30, 30)], 0) << "free space";
+      EXPECT_EQ(st[g.index(10, 30, 0)], 2);
+    } else {
+      EXPECT_EQ(st, want) << threads << " threads";
+    }
+  }
+}

@@ -412,3 +412,31 @@ TEST(Concurrency, RuleSixSearchesOnThreadsMatchOneThread) {
             2);
   EXPECT_TRUE(out[0] == out[1]);  // labels, and every field of every segment
 }
+
+TEST(Concurrency, GapFloodOnThreadsMatchesOneThread) {
+  // An occupied floor under a 2-voxel layer of ray gaps (0.5) and a sheet of gaps standing on it
+  // up to the top of the map, in free space: rule 3's flood of the gaps climbs from the floor's
+  // 5,120 seeds through every plane, on 2 threads slab by slab (rules/departures.cpp; each slab's
+  // voxels written by one thread, steps into another slab handed on). Under TSan this checks
+  // that handing on; everywhere, that labels and segments match one thread's.
+  const std::size_t d[3] = {64, 80, 48};
+  std::vector<float> p(d[0] * d[1] * d[2], 0.1f);
+  for (std::size_t z = 0; z < d[2]; ++z)
+    for (std::size_t y = 0; y < d[1]; ++y)
+      for (std::size_t x = 0; x < d[0]; ++x) {
+        float& v = p[x + d[0] * (y + d[1] * z)];
+        if (z == 0)
+          v = 0.9f;
+        else if (z <= 2 || x == 20 || x == 21)
+          v = 0.5f;
+      }
+  occseg_map* map = nullptr;
+  ASSERT_EQ(occseg_map_from_buffer(&map, p.data(), OCCSEG_F32, d, nullptr, 0.1), OCCSEG_OK);
+  const Output out[2] = {segment(map, 1, p.size()), segment(map, 2, p.size())};
+  occseg_map_free(map);
+  const auto at = [&](std::size_t x, std::size_t y, std::size_t z) { return out[0].labels[x + d[0] * (y + d[1] * z)]; };
+  // The standing sheet's top is not free: the flood reached it.
+  EXPECT_NE(out[0].segments[at(20, 40, 47)].state, OCCSEG_FREE);
+  EXPECT_EQ(out[0].segments[at(40, 40, 30)].state, OCCSEG_FREE);
+  EXPECT_TRUE(out[0] == out[1]);  // labels, and every field of every segment
+}

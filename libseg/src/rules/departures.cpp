@@ -241,36 +241,82 @@ namespace {
 // inside of a thin structure (a table top seen only edge-on) is such a gap; without this it would
 // be labelled free everywhere but along its rim. `queue` holds the seeds (gap voxels left unknown
 // that touch an occupied voxel), in any order: the result is a set (connected components), so it
-// does not depend on visiting order.
-// With `sb` (then `sf`, `su` its writable masks, `kinds` its row kinds), the voxels made unknown
-// move from the free mask to the unknown one.
+// does not depend on visiting order. On more threads the map is cut into slabs of planes, each
+// flooded by one thread, which alone writes its voxels (states, masks, row kinds); a step into
+// another slab is handed to that slab's next round, until no round hands anything on.
+// With `sf`, `su` (the state masks, writable) and `kinds` (their row kinds), the voxels made
+// unknown move from the free mask to the unknown one.
 void flood_gaps_from_objects(std::uint8_t* st, const detail::OwnBits& own, const BitMask& region, const Dims& d,
-                             std::vector<std::size_t>& queue, word_t* sf = nullptr, word_t* su = nullptr,
+                             std::vector<std::size_t>& queue, int threads, word_t* sf = nullptr, word_t* su = nullptr,
                              std::uint8_t* kinds = nullptr) {
   const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, sz = nx * ny;
-  auto gap = [&](std::size_t i) { return own.at(i / nx, i % nx) == kUnknown && !bit(region, i / nx, i % nx); };
-  while (!queue.empty()) {
-    const std::size_t i = queue.back();
-    queue.pop_back();
-    const std::size_t x = i % nx, y = (i / nx) % ny, z = i / sz;
-    auto visit = [&](std::size_t j) {
-      if (st[j] == kFree && gap(j)) {
-        st[j] = kUnknown;
-        queue.push_back(j);
-        if (sf) {
-          const std::size_t row = j / nx, x = j % nx, w = row * own.words + x / 64;
-          sf[w] &= ~(std::uint64_t(1) << (x % 64));
-          su[w] |= std::uint64_t(1) << (x % 64);
-          kinds[row] |= detail::StateBits::kUnknown;  // (kFree may stay: a superset)
+  const auto workers = static_cast<std::size_t>(resolve_threads(threads));
+  const std::size_t slabs = std::min<std::size_t>(nz, queue.size() < 4096 || workers < 2 ? 1 : 4 * workers);
+  const auto first_plane = [&](std::size_t s) { return s * nz / slabs; };  // slab s: planes [first(s), first(s + 1))
+  const auto slab_of = [&](std::size_t i) {
+    const std::size_t z = i / sz;
+    std::size_t s = z * slabs / nz;  // (within one of the slab, either way)
+    while (s + 1 < slabs && first_plane(s + 1) <= z) ++s;
+    while (first_plane(s) > z) --s;
+    return s;
+  };
+  // inbox[s]: voxels of slab s to take if they are free gap voxels, then flood from; the seeds
+  // are flooded from as they are.
+  std::vector<std::vector<std::size_t>> inbox(slabs), seeds(slabs);
+  for (const std::size_t i : queue) seeds[slab_of(i)].push_back(i);
+  queue = std::vector<std::size_t>();
+  // What slab s hands to the slab below it (s - 1) and above it (s + 1) this round.
+  std::vector<std::vector<std::size_t>> to_below(slabs), to_above(slabs);
+  for (bool first = true;; first = false) {
+    parallel_for_dynamic(slabs, threads, [&](std::size_t s0, std::size_t s1) {
+      for (std::size_t s = s0; s < s1; ++s) {
+        std::vector<std::size_t> stack = first ? std::move(seeds[s]) : std::vector<std::size_t>();
+        const auto take = [&](std::size_t j) {
+          if (st[j] != kFree || !(own.at(j / nx, j % nx) == kUnknown && !bit(region, j / nx, j % nx))) return;
+          st[j] = kUnknown;
+          if (sf) {
+            const std::size_t row = j / nx, x = j % nx, w = row * own.words + x / 64;
+            sf[w] &= ~(std::uint64_t(1) << (x % 64));
+            su[w] |= std::uint64_t(1) << (x % 64);
+            kinds[row] |= detail::StateBits::kUnknown;  // (kFree may stay: a superset)
+          }
+          stack.push_back(j);
+        };
+        for (const std::size_t j : inbox[s]) take(j);
+        // (Steps along x and y stay in the plane, so in the slab; along z they may leave it.)
+        const std::size_t z0 = first_plane(s), z1 = first_plane(s + 1);
+        while (!stack.empty()) {
+          const std::size_t i = stack.back();
+          stack.pop_back();
+          const std::size_t x = i % nx, y = (i / nx) % ny, z = i / sz;
+          if (x > 0) take(i - 1);
+          if (x + 1 < nx) take(i + 1);
+          if (y > 0) take(i - nx);
+          if (y + 1 < ny) take(i + nx);
+          if (z > 0) {
+            if (z > z0)
+              take(i - sz);
+            else
+              to_below[s].push_back(i - sz);
+          }
+          if (z + 1 < nz) {
+            if (z + 1 < z1)
+              take(i + sz);
+            else
+              to_above[s].push_back(i + sz);
+          }
         }
       }
-    };
-    if (x > 0) visit(i - 1);
-    if (x + 1 < nx) visit(i + 1);
-    if (y > 0) visit(i - nx);
-    if (y + 1 < ny) visit(i + nx);
-    if (z > 0) visit(i - sz);
-    if (z + 1 < nz) visit(i + sz);
+    });
+    bool more = false;
+    for (std::size_t s = 0; s < slabs; ++s) {
+      inbox[s].clear();
+      if (s > 0) inbox[s].insert(inbox[s].end(), to_above[s - 1].begin(), to_above[s - 1].end());
+      if (s + 1 < slabs) inbox[s].insert(inbox[s].end(), to_below[s + 1].begin(), to_below[s + 1].end());
+      more = more || !inbox[s].empty();
+    }
+    for (std::size_t s = 0; s < slabs; ++s) to_below[s].clear(), to_above[s].clear();
+    if (!more) break;
   }
 }
 
@@ -316,7 +362,7 @@ void detail::apply_voxel_rules(std::uint8_t* st, const OwnBits& own, const Dims&
     std::lock_guard<std::mutex> lock(seeds_mutex);
     seeds.insert(seeds.end(), mine.begin(), mine.end());
   });
-  flood_gaps_from_objects(st, own, region, d, seeds, sf, su, row_kinds);
+  flood_gaps_from_objects(st, own, region, d, seeds, params.threads, sf, su, row_kinds);
   if (bits) *bits = StateBits{sf, su, so, W, row_kinds};
 }
 
