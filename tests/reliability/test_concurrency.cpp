@@ -2,6 +2,7 @@
 // threads, one map and one parameter set shared by readers, per-thread error texts, the
 // progress callback's thread, and concurrent writers of one output path.
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cstring>
 #include <thread>
@@ -70,6 +71,26 @@ Output segment(const occseg_map* map, int threads, std::size_t voxels = kN * kN 
   occseg_result_free(r);
   occseg_params_free(params);
   return o;
+}
+
+// The values p(x, y, z) of a map of dims d, x fastest.
+template <class F>
+std::vector<float> values_of(const std::size_t d[3], F&& p) {
+  std::vector<float> v(d[0] * d[1] * d[2]);
+  for (std::size_t z = 0; z < d[2]; ++z)
+    for (std::size_t y = 0; y < d[1]; ++y)
+      for (std::size_t x = 0; x < d[0]; ++x) v[x + d[0] * (y + d[1] * z)] = p(x, y, z);
+  return v;
+}
+
+// The map of values p (dims d, voxels of `voxel_size` metres) segmented on 1 and on 2 threads
+// (a fatal failure when the map is refused: call it in ASSERT_NO_FATAL_FAILURE).
+void on_one_and_two_threads(const std::vector<float>& p, const std::size_t d[3], double voxel_size,
+                            std::array<Output, 2>& out) {
+  occseg_map* map = nullptr;
+  ASSERT_EQ(occseg_map_from_buffer(&map, p.data(), OCCSEG_F32, d, nullptr, voxel_size), OCCSEG_OK);
+  out = {segment(map, 1, p.size()), segment(map, 2, p.size())};
+  occseg_map_free(map);
 }
 
 occseg_map* make_map(unsigned seed) {
@@ -364,20 +385,15 @@ TEST(Concurrency, RuleElevenSearchesSideBySideMatchOneThread) {
   // plane searches run side by side on 2 threads (rules/structure.cpp). Under TSan this checks
   // those searches share nothing they write; everywhere, that labels and kinds match one thread's.
   const std::size_t d[3] = {96, 96, 192};
-  std::vector<float> p(d[0] * d[1] * d[2]);
-  for (std::size_t z = 0; z < d[2]; ++z)
-    for (std::size_t y = 0; y < d[1]; ++y)
-      for (std::size_t x = 0; x < d[0]; ++x) {
-        const std::size_t rx = x % 48, ry = y % 48;
-        const bool floor = z == 2 && rx >= 2 && rx <= 37 && ry >= 2 && ry <= 37;
-        const bool wall = rx == 2 && ry >= 2 && ry <= 37 && z >= 2 && z <= 27;
-        const bool box = rx >= 3 && rx <= 8 && ry >= 15 && ry <= 20 && z >= 3 && z <= 9;
-        p[x + d[0] * (y + d[1] * z)] = floor || wall || box ? 0.9f : (z < 2 || rx < 2 ? 0.5f : 0.1f);
-      }
-  occseg_map* map = nullptr;
-  ASSERT_EQ(occseg_map_from_buffer(&map, p.data(), OCCSEG_F32, d, nullptr, 0.1), OCCSEG_OK);
-  const Output out[2] = {segment(map, 1, p.size()), segment(map, 2, p.size())};
-  occseg_map_free(map);
+  const std::vector<float> p = values_of(d, [](std::size_t x, std::size_t y, std::size_t z) {
+    const std::size_t rx = x % 48, ry = y % 48;
+    const bool floor = z == 2 && rx >= 2 && rx <= 37 && ry >= 2 && ry <= 37;
+    const bool wall = rx == 2 && ry >= 2 && ry <= 37 && z >= 2 && z <= 27;
+    const bool box = rx >= 3 && rx <= 8 && ry >= 15 && ry <= 20 && z >= 3 && z <= 9;
+    return floor || wall || box ? 0.9f : (z < 2 || rx < 2 ? 0.5f : 0.1f);
+  });
+  std::array<Output, 2> out;
+  ASSERT_NO_FATAL_FAILURE(on_one_and_two_threads(p, d, 0.1, out));
   const auto kinds = [&](occseg_kind k) {
     return std::count_if(out[0].segments.begin(), out[0].segments.end(),
                          [k](const occseg_segment_info& s) { return s.kind == k; });
@@ -395,14 +411,11 @@ TEST(Concurrency, RuleSixSearchesOnThreadsMatchOneThread) {
   // are one object, walls 6 apart are not (object_gap 4). Under TSan this checks the marking;
   // everywhere, that labels and segments match one thread's.
   const std::size_t d[3] = {40, 64, 64};
-  std::vector<float> p(d[0] * d[1] * d[2], 0.5f);
-  for (std::size_t z = 0; z < d[2]; ++z)
-    for (std::size_t y = 0; y < d[1]; ++y)
-      for (const std::size_t x : {10, 13, 20, 25}) p[x + d[0] * (y + d[1] * z)] = 0.9f;
-  occseg_map* map = nullptr;
-  ASSERT_EQ(occseg_map_from_buffer(&map, p.data(), OCCSEG_F32, d, nullptr, 0.1), OCCSEG_OK);
-  const Output out[2] = {segment(map, 1, p.size()), segment(map, 2, p.size())};
-  occseg_map_free(map);
+  const std::vector<float> p = values_of(d, [](std::size_t x, std::size_t, std::size_t) {
+    return x == 10 || x == 13 || x == 20 || x == 25 ? 0.9f : 0.5f;
+  });
+  std::array<Output, 2> out;
+  ASSERT_NO_FATAL_FAILURE(on_one_and_two_threads(p, d, 0.1, out));
   const auto at = [&](std::size_t x) { return out[0].labels[x + d[0] * (d[1] / 2 + d[1] * (d[2] / 2))]; };
   EXPECT_EQ(at(10), at(13));
   EXPECT_EQ(at(20), at(25));
@@ -420,20 +433,11 @@ TEST(Concurrency, GapFloodOnThreadsMatchesOneThread) {
   // voxels written by one thread, steps into another slab handed on). Under TSan this checks
   // that handing on; everywhere, that labels and segments match one thread's.
   const std::size_t d[3] = {64, 80, 48};
-  std::vector<float> p(d[0] * d[1] * d[2], 0.1f);
-  for (std::size_t z = 0; z < d[2]; ++z)
-    for (std::size_t y = 0; y < d[1]; ++y)
-      for (std::size_t x = 0; x < d[0]; ++x) {
-        float& v = p[x + d[0] * (y + d[1] * z)];
-        if (z == 0)
-          v = 0.9f;
-        else if (z <= 2 || x == 20 || x == 21)
-          v = 0.5f;
-      }
-  occseg_map* map = nullptr;
-  ASSERT_EQ(occseg_map_from_buffer(&map, p.data(), OCCSEG_F32, d, nullptr, 0.1), OCCSEG_OK);
-  const Output out[2] = {segment(map, 1, p.size()), segment(map, 2, p.size())};
-  occseg_map_free(map);
+  const std::vector<float> p = values_of(d, [](std::size_t x, std::size_t, std::size_t z) {
+    return z == 0 ? 0.9f : z <= 2 || x == 20 || x == 21 ? 0.5f : 0.1f;
+  });
+  std::array<Output, 2> out;
+  ASSERT_NO_FATAL_FAILURE(on_one_and_two_threads(p, d, 0.1, out));
   const auto at = [&](std::size_t x, std::size_t y, std::size_t z) { return out[0].labels[x + d[0] * (y + d[1] * z)]; };
   // The standing sheet's top is not free: the flood reached it.
   EXPECT_NE(out[0].segments[at(20, 40, 47)].state, OCCSEG_FREE);
