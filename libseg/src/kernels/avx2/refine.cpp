@@ -95,13 +95,7 @@ __attribute__((target("avx2"))) PlaneRow plane_row(const std::uint8_t* prev, std
     }
     store(skip + x, next);
   }
-  if (x < nx) {
-    std::uint32_t lanes[32];
-    const std::size_t count = generic::window_starts_from(prev, cur, skip, x, nx, lanes, 0);
-    const PlaneRow tail = generic::lane_windows(prev, cur, rs, rows, skip, lanes, count, occ, unk);
-    r.occupied_rows |= tail.occupied_rows;
-    r.started = r.started || tail.started;
-  }
+  generic::lane_windows(prev, cur, rs, rows, skip, x, nx, occ, unk, generic::PlainStarts{prev, cur, skip}, r);
   return r;
 }
 

@@ -54,34 +54,50 @@ __attribute__((always_inline)) inline std::size_t window_starts_from(const std::
   return count;
 }
 
-// The windows of plane_row() for the lanes listed (count of them, increasing), their skips set.
-__attribute__((always_inline)) inline PlaneRow lane_windows(const std::uint8_t* prev, std::uint8_t* cur,
-                                                            std::ptrdiff_t rs, int rows, std::uint8_t* skip,
-                                                            const std::uint32_t* lanes, std::size_t count,
-                                                            const word_t* const* occ, const word_t* const* unk) {
-  PlaneRow r;
-  r.started = count != 0;
-  for (std::size_t j = 0; j < count; ++j) {
-    const std::size_t x = lanes[j];
-    std::uint8_t* const c = cur + x;
-    int n = 1;  // the window's voxels: c[0] and those after it equal to it
-    while (n < rows && c[n * rs] == c[0]) ++n;
-    const std::size_t i = x / 64;
-    const unsigned b = x % 64;
-    const auto lane = [&](const word_t* const* w) {
-      std::uint64_t m = 0;
-      for (int k = 0; k < n; ++k) m |= ((w[k][i] >> b) & 1u) << k;
-      return m;
-    };
-    const std::uint8_t from = prev[x];
-    const std::uint64_t all = n >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << n) - 1;
-    std::uint64_t moves = window_moves(lane(occ), all, from, [&] { return lane(unk); });
-    if (from == kOccupied) r.occupied_rows |= moves;
-    for (; moves; moves &= moves - 1) c[__builtin_ctzll(moves) * rs] = from;
-    skip[x] = static_cast<std::uint8_t>(n - 1);
+// plane_row() for lanes [x, nx), 64 at a time (the lanes' list on the stack), into r: starts(b,
+// e, lanes) lists the lanes of [b, e) that start a window (window_starts' rule, their skips
+// counted down; absolute lane numbers, increasing) and returns how many; each such window is
+// then decided on its own.
+template <class Starts>
+__attribute__((always_inline)) inline void lane_windows(const std::uint8_t* prev, std::uint8_t* cur, std::ptrdiff_t rs,
+                                                        int rows, std::uint8_t* skip, std::size_t x, std::size_t nx,
+                                                        const word_t* const* occ, const word_t* const* unk,
+                                                        Starts&& starts, PlaneRow& r) {
+  std::uint32_t lanes[64];
+  for (; x < nx; x += 64) {
+    const std::size_t count = starts(x, nx - x < 64 ? nx : x + 64, lanes);
+    r.started = r.started || count != 0;
+    for (std::size_t j = 0; j < count; ++j) {
+      const std::size_t l = lanes[j];
+      std::uint8_t* const c = cur + l;
+      int n = 1;  // the window's voxels: c[0] and those after it equal to it
+      while (n < rows && c[n * rs] == c[0]) ++n;
+      const std::size_t i = l / 64;
+      const unsigned b = l % 64;
+      const auto lane = [&](const word_t* const* w) {
+        std::uint64_t m = 0;
+        for (int k = 0; k < n; ++k) m |= ((w[k][i] >> b) & 1u) << k;
+        return m;
+      };
+      const std::uint8_t from = prev[l];
+      const std::uint64_t all = n >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << n) - 1;
+      std::uint64_t moves = window_moves(lane(occ), all, from, [&] { return lane(unk); });
+      if (from == kOccupied) r.occupied_rows |= moves;
+      for (; moves; moves &= moves - 1) c[__builtin_ctzll(moves) * rs] = from;
+      skip[l] = static_cast<std::uint8_t>(n - 1);
+    }
   }
-  return r;
 }
+
+// lane_windows()' starts by the plain loop.
+struct PlainStarts {
+  const std::uint8_t* prev;
+  const std::uint8_t* cur;
+  std::uint8_t* skip;
+  std::size_t operator()(std::size_t b, std::size_t e, std::uint32_t* lanes) const {
+    return window_starts_from(prev, cur, skip, b, e, lanes, 0);
+  }
+};
 
 // Bits [x, nx) of pack_states() (the words cleared already).
 __attribute__((always_inline)) inline void pack_states_from(const std::uint8_t* st, std::size_t x, std::size_t nx,

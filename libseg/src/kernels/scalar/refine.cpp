@@ -20,15 +20,8 @@ std::size_t window_starts(const std::uint8_t* prev, const std::uint8_t* cur, std
 
 PlaneRow plane_row(const std::uint8_t* prev, std::uint8_t* cur, std::ptrdiff_t rs, int rows, std::uint8_t* skip,
                    std::size_t nx, const word_t* const* occ, const word_t* const* unk) {
-  std::uint32_t lanes[64];
   PlaneRow r;
-  for (std::size_t x = 0; x < nx; x += 64) {  // (64 lanes at a time: the lanes' list on the stack)
-    const std::size_t e = nx - x < 64 ? nx : x + 64;
-    const std::size_t count = generic::window_starts_from(prev, cur, skip, x, e, lanes, 0);
-    const PlaneRow part = generic::lane_windows(prev, cur, rs, rows, skip, lanes, count, occ, unk);
-    r.occupied_rows |= part.occupied_rows;
-    r.started = r.started || part.started;
-  }
+  generic::lane_windows(prev, cur, rs, rows, skip, 0, nx, occ, unk, generic::PlainStarts{prev, cur, skip}, r);
   return r;
 }
 
